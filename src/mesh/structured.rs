@@ -1,0 +1,75 @@
+//! Structured generators.
+
+use super::Mesh;
+
+/// Boundary part names of [`rectangle`], in part-index order.
+pub fn rectangle_part_names() -> [&'static str; 4] {
+    ["left", "right", "bottom", "top"]
+}
+
+/// Uniform triangulation of the rectangle (0, lx) × (0, ly).
+///
+/// The rectangle is cut into `nx × ny` equal cells; each cell is split into two triangles along
+/// its diagonal from the lower-left to the upper-right corner ("/" pattern). Node (i, j) sits at
+/// (i·lx/nx, j·ly/ny) and has index `i + j (nx + 1)`. Because every cell is cut the same way,
+/// the mesh of `2nx × 2ny` refines the mesh of `nx × ny` exactly (nested meshes), which the
+/// convergence study relies on for exact P1 prolongation.
+///
+/// Boundary parts: `left` (x = 0), `right` (x = lx), `bottom` (y = 0), `top` (y = ly).
+pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
+    assert!(nx > 0 && ny > 0, "rectangle needs at least one cell per direction");
+    let node = |i: usize, j: usize| i + j * (nx + 1);
+    let mut coords = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            coords.push([lx * i as f64 / nx as f64, ly * j as f64 / ny as f64, 0.0]);
+        }
+    }
+    let mut cells = Vec::with_capacity(6 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (node(i, j), node(i + 1, j), node(i + 1, j + 1), node(i, j + 1));
+            // Both triangles counter-clockwise.
+            cells.extend_from_slice(&[a, b, c]);
+            cells.extend_from_slice(&[a, c, d]);
+        }
+    }
+    let mut facets = Vec::new();
+    let mut facet_parts = Vec::new();
+    let mut push = |p: usize, q: usize, part: usize| {
+        facets.extend_from_slice(&[p, q]);
+        facet_parts.push(part);
+    };
+    for j in 0..ny {
+        push(node(0, j), node(0, j + 1), 0);
+        push(node(nx, j), node(nx, j + 1), 1);
+    }
+    for i in 0..nx {
+        push(node(i, 0), node(i + 1, 0), 2);
+        push(node(i, ny), node(i + 1, ny), 3);
+    }
+    Mesh {
+        dim: 2,
+        coords,
+        cells,
+        facets,
+        facet_parts,
+        part_names: rectangle_part_names().iter().map(|s| s.to_string()).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangle_counts_and_area() {
+        let mesh = rectangle(40.0, 10.0, 8, 2);
+        assert_eq!(mesh.n_nodes(), 27);
+        assert_eq!(mesh.n_cells(), 32);
+        assert_eq!(mesh.n_facets(), 2 * 8 + 2 * 2);
+        assert!((mesh.volume() - 400.0).abs() < 1e-10);
+        let bottom = mesh.part_index("bottom").unwrap();
+        assert_eq!(mesh.nodes_on(&[bottom]).iter().filter(|&&b| b).count(), 9);
+    }
+}
