@@ -1,0 +1,10 @@
+//! The laws on the contact boundary Γ_C: friction (8), heat exchange and frictional heating (9).
+//!
+//! The bilateral condition (7), u_ν = 0, is not a law but a constraint on the velocity space;
+//! it lives in [`crate::fem::dofs`].
+
+pub mod friction;
+pub mod heat;
+
+pub use friction::{project_to_ball, FrictionLaw, SlipWeakening, Tresca};
+pub use heat::{FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange};

@@ -1,0 +1,38 @@
+//! The norms of the stop criteria (77)–(80) and of the error estimate (73).
+//!
+//! ‖v‖_E = ‖ε(v)‖_L², ‖θ‖_V = ‖∇θ‖_L² (exact for P1 through their Gram matrices); on Γ_C the
+//! nodal fields ξ and ζ use the same nodal quadrature as the contact terms:
+//! ‖ξ‖²_L²(ΓC) ≈ Σ_i ℓ_i |ξ_i|².
+
+use crate::fem::assembly::Matrices;
+use crate::problem::Problem;
+
+/// ‖ε(v)‖_L² of a full nodal vector field.
+pub fn energy(matrices: &Matrices, v: &[f64]) -> f64 {
+    matrices.energy_gram.quadratic_form(v).max(0.0).sqrt()
+}
+
+/// ‖∇θ‖_L² of a full nodal scalar field.
+pub fn gradient(matrices: &Matrices, theta: &[f64]) -> f64 {
+    matrices.gradient_gram.quadratic_form(theta).max(0.0).sqrt()
+}
+
+/// L²(Γ_C) norm of a nodal field on the frictional contact nodes (tangent coordinates).
+pub fn contact_l2(problem: &Problem, field: &[[f64; 2]]) -> f64 {
+    problem
+        .contact
+        .iter()
+        .zip(field)
+        .map(|(node, v)| node.weight * (v[0] * v[0] + v[1] * v[1]))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// ζ_i = −∂j(θ_i) at the contact nodes (the heat-exchange multiplier of Problem 14).
+pub fn heat_exchange_multiplier(problem: &Problem, theta: &[f64]) -> Vec<f64> {
+    problem
+        .contact
+        .iter()
+        .map(|node| -problem.exchange.derivative(theta[node.node]))
+        .collect()
+}

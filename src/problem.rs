@@ -1,0 +1,222 @@
+//! The discrete problem: a scenario turned into a mesh, spaces, assembled matrices, loads and
+//! laws — everything that stays fixed during a run.
+
+use crate::contact::{
+    FrictionLaw, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange, SlipWeakening, Tresca,
+};
+use crate::error::Error;
+use crate::fem::assembly::{self, Matrices};
+use crate::fem::dofs::{tangent_basis, TemperatureSpace, VelocitySpace};
+use crate::material::{Isotropic, Material};
+use crate::mesh::{self, Mesh};
+use crate::scenario::{FrictionSpec, Scenario};
+
+/// A node of Γ_C that carries friction: not clamped.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactNode {
+    /// Mesh node.
+    pub node: usize,
+    /// ℓ_i = ∫_ΓC φ_i, the nodal quadrature weight.
+    pub weight: f64,
+    /// Velocity unknowns of the tangential components (first d − 1 used).
+    pub tangent_dofs: [usize; 2],
+    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
+    pub theta_dof: Option<usize>,
+}
+
+/// Everything fixed during a run.
+#[derive(Debug)]
+pub struct Problem {
+    pub scenario: Scenario,
+    pub mesh: Mesh,
+    pub material: Material,
+    /// E^h.
+    pub velocity: VelocitySpace,
+    /// V^h.
+    pub temperature: TemperatureSpace,
+    pub matrices: Matrices,
+    /// Frictional contact nodes of Γ_C.
+    pub contact: Vec<ContactNode>,
+    /// ℓ_p on every node of Γ_C (including clamped ones), zero elsewhere.
+    pub contact_weights: Vec<f64>,
+    /// Orthonormal tangent basis of Γ_C.
+    pub tangents: Vec<[f64; 3]>,
+    pub friction: Box<dyn FrictionLaw>,
+    pub exchange: Box<dyn HeatExchange>,
+    pub heating: Box<dyn FrictionalHeating>,
+    /// Full velocity loads: F(t) = force_constant + t · force_rate.
+    force_constant: Vec<f64>,
+    force_rate: Vec<f64>,
+    /// Full temperature loads: ∫ g η + k_e θ_R ∫_ΓC η = heat_constant + t · heat_rate.
+    heat_constant: Vec<f64>,
+    heat_rate: Vec<f64>,
+    /// θ_D at Dirichlet nodes, zero elsewhere (full temperature vector).
+    pub theta_dirichlet: Vec<f64>,
+}
+
+impl Problem {
+    /// Builds the mesh, spaces, matrices and loads of a scenario.
+    pub fn new(scenario: &Scenario) -> Result<Self, Error> {
+        scenario.validate()?;
+        let d = scenario.dim();
+        let mesh = match d {
+            2 => mesh::rectangle(
+                scenario.geometry.lengths[0],
+                scenario.geometry.lengths[1],
+                scenario.mesh.nx,
+                scenario.mesh.ny,
+            ),
+            _ => {
+                return Err(Error::InvalidValue {
+                    key: "geometry.lengths".into(),
+                    value: format!("{:?}", scenario.geometry.lengths),
+                    expected: "2 lengths: this version meshes rectangles only".into(),
+                })
+            }
+        };
+        let parts = |names: &[String]| -> Vec<usize> { names.iter().filter_map(|n| mesh.part_index(n)).collect() };
+        let (dirichlet, neumann, contact_parts) = (
+            parts(&scenario.boundary.dirichlet),
+            parts(&scenario.boundary.neumann),
+            parts(&scenario.boundary.contact),
+        );
+        let m = &scenario.material;
+        let material = Material {
+            density: m.density,
+            heat_capacity: m.heat_capacity,
+            viscosity: Isotropic::viscosity(m.viscosity_mu1, m.viscosity_mu2),
+            elasticity: Isotropic::elasticity(m.young, m.poisson),
+            expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
+            conductivity: m.conductivity,
+        };
+
+        // Constraints; Dirichlet wins at corners.
+        let clamped = mesh.nodes_on(&dirichlet);
+        let on_contact = mesh.nodes_on(&contact_parts);
+        let contact_marks: Vec<bool> = on_contact.iter().zip(&clamped).map(|(&c, &cl)| c && !cl).collect();
+        let tangents = tangent_basis(&scenario.boundary.contact_normal);
+        let (velocity, tangent_dofs) = VelocitySpace::new(d, &clamped, &contact_marks, &tangents);
+        let theta_fixed = mesh.nodes_on(&[dirichlet.clone(), neumann.clone()].concat());
+        let temperature = TemperatureSpace::new(&theta_fixed);
+
+        let exchange = QuadraticExchange {
+            coefficient: scenario.heat_exchange.coefficient,
+            foundation_temperature: scenario.heat_exchange.foundation_temperature,
+        };
+        let (k_e, theta_r) = exchange.robin();
+        let matrices = assembly::assemble_matrices(&mesh, &material, &contact_parts, k_e);
+
+        let contact_weights = assembly::boundary_weights(&mesh, &contact_parts);
+        let contact = (0..mesh.n_nodes())
+            .filter_map(|p| {
+                tangent_dofs[p].map(|dofs| ContactNode {
+                    node: p,
+                    weight: contact_weights[p],
+                    tangent_dofs: dofs,
+                    theta_dof: temperature.free[p],
+                })
+            })
+            .collect();
+
+        let loads = &scenario.loads;
+        let mut force_constant = assembly::body_load(&mesh, &loads.body_force.constant);
+        let mut force_rate = assembly::body_load(&mesh, &loads.body_force.rate);
+        for traction in &loads.traction {
+            let part = parts(std::slice::from_ref(&traction.part));
+            add(
+                &mut force_constant,
+                &assembly::traction_load(&mesh, &part, &traction.constant),
+            );
+            add(&mut force_rate, &assembly::traction_load(&mesh, &part, &traction.rate));
+        }
+        let mut heat_constant = assembly::scalar_body_load(&mesh, loads.heat_source.constant);
+        let heat_rate = assembly::scalar_body_load(&mesh, loads.heat_source.rate);
+        add(
+            &mut heat_constant,
+            &contact_weights.iter().map(|w| k_e * theta_r * w).collect::<Vec<_>>(),
+        );
+
+        let theta_dirichlet = theta_fixed
+            .iter()
+            .map(|&f| if f { scenario.boundary.temperature } else { 0.0 })
+            .collect();
+
+        let friction: Box<dyn FrictionLaw> = match scenario.friction {
+            FrictionSpec::SlipWeakening { bound, a, b, alpha } => Box::new(SlipWeakening {
+                scale: bound,
+                a,
+                b,
+                alpha,
+            }),
+            FrictionSpec::Tresca { bound } => Box::new(Tresca { scale: bound }),
+        };
+        Ok(Problem {
+            scenario: scenario.clone(),
+            mesh,
+            material,
+            velocity,
+            temperature,
+            matrices,
+            contact,
+            contact_weights,
+            tangents,
+            friction,
+            exchange: Box::new(exchange),
+            heating: Box::new(LinearHeating {
+                rate: scenario.frictional_heating.clone(),
+            }),
+            force_constant,
+            force_rate,
+            heat_constant,
+            heat_rate,
+            theta_dirichlet,
+        })
+    }
+
+    /// Space dimension d.
+    pub fn dim(&self) -> usize {
+        self.mesh.dim
+    }
+
+    /// Time step k.
+    pub fn time_step(&self) -> f64 {
+        self.scenario.time_step()
+    }
+
+    /// Number of velocity unknowns.
+    pub fn n_w(&self) -> usize {
+        self.velocity.n_free
+    }
+
+    /// Number of unknowns of the coupled step system (velocity then temperature).
+    pub fn n_unknowns(&self) -> usize {
+        self.velocity.n_free + self.temperature.n_free
+    }
+
+    /// F(t): ⟨f(t), φ⟩ = ∫ f₀ · φ + ∫_ΓN f₂ · φ on full velocity dofs.
+    pub fn force(&self, t: f64) -> Vec<f64> {
+        self.force_constant
+            .iter()
+            .zip(&self.force_rate)
+            .map(|(c, r)| c + t * r)
+            .collect()
+    }
+
+    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs.
+    pub fn heat_load(&self, t: f64) -> Vec<f64> {
+        self.heat_constant
+            .iter()
+            .zip(&self.heat_rate)
+            .map(|(c, r)| c + t * r)
+            .collect()
+    }
+
+    /// |Γ_C| by the nodal weights.
+    pub fn contact_measure(&self) -> f64 {
+        self.contact_weights.iter().sum()
+    }
+}
+
+fn add(target: &mut [f64], other: &[f64]) {
+    target.iter_mut().zip(other).for_each(|(t, o)| *t += o);
+}
