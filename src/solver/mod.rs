@@ -1,0 +1,68 @@
+//! Time stepping and the nonsmooth solvers of one step.
+//!
+//! [`system::StepSystem`] holds the linear part of Problem 14, factored once per run;
+//! [`paper::PaperSolver`] is the convexification + augmented-Lagrangian solver of Problem 17.
+
+pub mod condensed;
+pub mod paper;
+pub mod system;
+
+use serde::Serialize;
+
+use crate::norms;
+use crate::problem::Problem;
+use system::State;
+
+/// What one time step cost and how it ended.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StepInfo {
+    /// Outer (convexification) iterations.
+    pub convexification_iterations: usize,
+    /// Inner iterations summed over the outer ones (one linear solve each).
+    pub inner_iterations: usize,
+    /// Last relative increments of u, θ, ξ, ζ: the left sides of (77)–(80) over the right
+    /// sides' norms.
+    pub increments: [f64; 4],
+}
+
+/// Relative increments (77)–(80) between two iterates of one time step.
+pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64; 4] {
+    let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+    let ratio = |num: f64, den: f64| {
+        if num == 0.0 {
+            0.0
+        } else if den == 0.0 {
+            f64::INFINITY
+        } else {
+            num / den
+        }
+    };
+    let m = &problem.matrices;
+    let du = norms::energy(m, &diff(&new.u, &old.u));
+    let dtheta = norms::gradient(m, &diff(&new.theta, &old.theta));
+    let xi_diff: Vec<[f64; 2]> = new
+        .xi
+        .iter()
+        .zip(&old.xi)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
+        .collect();
+    let dxi = norms::contact_l2(problem, &xi_diff);
+    let zeta_new = norms::heat_exchange_multiplier(problem, &new.theta);
+    let zeta_old = norms::heat_exchange_multiplier(problem, &old.theta);
+    let zeta_diff: Vec<[f64; 2]> = zeta_new.iter().zip(&zeta_old).map(|(a, b)| [a - b, 0.0]).collect();
+    let zeta_ref: Vec<[f64; 2]> = zeta_old.iter().map(|z| [*z, 0.0]).collect();
+    [
+        ratio(du, norms::energy(m, &old.u)),
+        ratio(dtheta, norms::gradient(m, &old.theta)),
+        ratio(dxi, norms::contact_l2(problem, &old.xi)),
+        ratio(
+            norms::contact_l2(problem, &zeta_diff),
+            norms::contact_l2(problem, &zeta_ref),
+        ),
+    ]
+}
+
+/// All of (77)–(80) hold.
+pub fn increments_converged(increments: &[f64; 4], tolerance: f64) -> bool {
+    increments.iter().all(|&r| r <= tolerance)
+}

@@ -1,0 +1,211 @@
+//! The paper's nonsmooth solver (Section 6, Problem 17): a convexification loop around an
+//! augmented-Lagrangian solver of a convex Tresca-type problem.
+//!
+//! Outer loop (m): freeze the friction bound at the previous iterate, g_i = μ(|w_i^(m)|) S, so
+//! that −ξ_i ∈ g_i ∂|w_i| is the subdifferential of a convex function. Stop when the relative
+//! increments (77)–(80) of u (E-norm), θ (V-norm), ξ and ζ (L²(Γ_C)) are all ≤ ε_conv.
+//!
+//! Inner loop: the Uzawa form of the augmented Lagrangian on nodal multipliers,
+//! ξ_i ← P_{g_i}(ξ_i − r w_i(ξ)), where w(ξ) is the tangential velocity of the linear step
+//! problem loaded by ξ and P_g projects onto the ball of radius g. The frictional heat
+//! h_τ(|w^(m+1)|) is updated with the same iterates. The step r is 1/λ_max of the contact
+//! compliance C, which makes the iteration a contraction for stick nodes (r λ ≤ 1 < 2).
+//!
+//! The paper runs this in GetFEM on the full system. Here the inner iterations run on the
+//! condensed contact problem ([`super::condensed`]): w(ξ) = w_free + C ξ + H h is exact (up to
+//! round-off) and costs a dense product on Γ_C instead of a solve; each outer iterate then costs
+//! one solve for the full fields that (77)–(80) measure.
+
+use super::condensed::Condensation;
+use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
+use super::{increments_converged, relative_increments, StepInfo};
+use crate::contact::project_to_ball;
+use crate::error::Error;
+use crate::problem::Problem;
+
+/// Settings of the paper's solver.
+#[derive(Debug, Clone, Copy)]
+pub struct PaperParams {
+    /// ε_conv of (77)–(80).
+    pub tolerance: f64,
+    /// Cap on convexification iterations per step.
+    pub max_convexification: usize,
+    /// Relative tolerance of the inner augmented-Lagrangian loop (on ξ, relative to max g).
+    pub inner_tolerance: f64,
+    /// Cap on inner iterations per convex problem.
+    pub max_inner: usize,
+}
+
+/// The convexification + augmented-Lagrangian solver.
+pub struct PaperSolver<'a> {
+    problem: &'a Problem,
+    system: &'a StepSystem,
+    condensation: Condensation,
+    params: PaperParams,
+    /// Augmentation (Uzawa step) parameter r.
+    pub augmentation: f64,
+}
+
+impl<'a> PaperSolver<'a> {
+    /// Sets the solver up: condenses onto Γ_C and picks the augmentation parameter.
+    pub fn new(problem: &'a Problem, system: &'a StepSystem, params: PaperParams) -> Self {
+        let condensation = Condensation::new(problem, system);
+        let lambda_max = condensation.friction_spectral_bound();
+        let augmentation = if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 };
+        PaperSolver {
+            problem,
+            system,
+            condensation,
+            params,
+            augmentation,
+        }
+    }
+
+    /// One time step: from the state at t_{n−1} to the state at t_n.
+    pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
+        let problem = self.problem;
+        let tangential = problem.dim() - 1;
+        let n = previous.n + 1;
+        let t = n as f64 * problem.time_step();
+        let n_w = problem.n_w();
+        let n_contact = problem.contact.len();
+        let base = self.system.rhs(problem, previous, t);
+        let mut x = base.clone();
+        self.system.solve_in_place(&mut x);
+        let w_free = flatten(&tangential_velocities(problem, &x), tangential);
+
+        // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
+        let mut current = previous.clone();
+        current.n = n;
+        current.u = previous
+            .u
+            .iter()
+            .zip(&previous.w)
+            .map(|(u, w)| u + problem.time_step() * w)
+            .collect();
+        let mut xi = flatten(&previous.xi, tangential);
+        let mut w = flatten(&contact_tangential(problem, &previous.w), tangential);
+        let speed = |w: &[f64], i: usize| {
+            w[i * tangential..(i + 1) * tangential]
+                .iter()
+                .map(|v| v * v)
+                .sum::<f64>()
+                .sqrt()
+        };
+        let mut heat: Vec<f64> = (0..n_contact).map(|i| problem.heating.heat(t, speed(&w, i))).collect();
+        let mut info = StepInfo::default();
+
+        for m in 0..self.params.max_convexification {
+            // Problem 17_n^m: the bound frozen at the previous iterate.
+            let bounds: Vec<f64> = (0..n_contact).map(|i| problem.friction.bound(speed(&w, i))).collect();
+            let g_max = bounds.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+            let mut converged = false;
+            let mut change = f64::INFINITY;
+            for _ in 0..self.params.max_inner {
+                info.inner_iterations += 1;
+                self.condensation.velocities(&w_free, &xi, &heat, &mut w);
+                change = 0.0;
+                for i in 0..n_contact {
+                    let range = i * tangential..(i + 1) * tangential;
+                    let mut trial = [0.0; 2];
+                    for (k, j) in range.clone().enumerate() {
+                        trial[k] = xi[j] - self.augmentation * w[j];
+                    }
+                    project_to_ball(&mut trial[..tangential], bounds[i]);
+                    for (k, j) in range.enumerate() {
+                        change = change.max((trial[k] - xi[j]).abs());
+                        xi[j] = trial[k];
+                    }
+                }
+                let mut heat_change: f64 = 0.0;
+                let mut heat_scale: f64 = 0.0;
+                for (i, h) in heat.iter_mut().enumerate() {
+                    let new = problem.heating.heat(t, speed(&w, i));
+                    heat_change = heat_change.max((new - *h).abs());
+                    heat_scale = heat_scale.max(new.abs());
+                    *h = new;
+                }
+                if change <= self.params.inner_tolerance * g_max
+                    && heat_change <= self.params.inner_tolerance * heat_scale.max(1.0)
+                {
+                    converged = true;
+                    break;
+                }
+            }
+            if !converged {
+                return Err(Error::NotConverged {
+                    solver: "paper",
+                    loop_name: "inner augmented-Lagrangian",
+                    step: n,
+                    time: t,
+                    iterations: self.params.max_inner,
+                    residuals: format!("max |Δξ| = {change:.3e} N/m against max bound {g_max:.3e} N/m"),
+                    tolerance: self.params.inner_tolerance,
+                });
+            }
+            // The full fields of this iterate: one solve with the converged contact terms.
+            self.condensation.velocities(&w_free, &xi, &heat, &mut w);
+            let xi_nodes = unflatten(&xi, tangential);
+            x.copy_from_slice(&base);
+            add_contact_terms(problem, n_w, &xi_nodes, &heat, &mut x);
+            self.system.solve_in_place(&mut x);
+            let next = self.system.state_from(problem, previous, &x, xi_nodes);
+            let increments = relative_increments(problem, &current, &next);
+            info.convexification_iterations = m + 1;
+            info.increments = increments;
+            current = next;
+            if increments_converged(&increments, self.params.tolerance) {
+                return Ok((current, info));
+            }
+        }
+        Err(Error::NotConverged {
+            solver: "paper",
+            loop_name: "convexification",
+            step: n,
+            time: t,
+            iterations: self.params.max_convexification,
+            residuals: format_increments(&info.increments),
+            tolerance: self.params.tolerance,
+        })
+    }
+}
+
+/// Node-major flat vector of the first `tangential` components.
+pub fn flatten(v: &[[f64; 2]], tangential: usize) -> Vec<f64> {
+    v.iter().flat_map(|x| x[..tangential].to_vec()).collect()
+}
+
+/// Inverse of [`flatten`].
+pub fn unflatten(v: &[f64], tangential: usize) -> Vec<[f64; 2]> {
+    v.chunks_exact(tangential)
+        .map(|c| {
+            let mut out = [0.0; 2];
+            out[..tangential].copy_from_slice(c);
+            out
+        })
+        .collect()
+}
+
+/// "u: …, θ: …, ξ: …, ζ: …" for error messages.
+pub fn format_increments(inc: &[f64; 4]) -> String {
+    format!(
+        "u (77): {:.3e}, θ (78): {:.3e}, ξ (79): {:.3e}, ζ (80): {:.3e}",
+        inc[0], inc[1], inc[2], inc[3]
+    )
+}
+
+/// Tangential velocities at the contact nodes from a full velocity vector.
+pub fn contact_tangential(problem: &Problem, w_full: &[f64]) -> Vec<[f64; 2]> {
+    let d = problem.dim();
+    problem
+        .contact
+        .iter()
+        .map(|node| {
+            let mut out = [0.0; 2];
+            for (k, t) in problem.tangents.iter().enumerate() {
+                out[k] = (0..d).map(|c| t[c] * w_full[node.node * d + c]).sum();
+            }
+            out
+        })
+        .collect()
+}

@@ -1,0 +1,219 @@
+//! The linear part of one time step of Problem 14, factored once per run.
+//!
+//! With x = (W_n, Θ_n) on the unknowns of E^h × V^h:
+//!
+//! ```text
+//! (ℳ/k + 𝒦_A + k𝒦_B) W_n + G Θ_n   = ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n + Σ_i ℓ_i ξ_i·t
+//! −Gᵀ W_n + (ℳ_θ/k + 𝒦_θ) Θ_n       = ℳ_θ Θ_{n−1}/k + G_n + Σ_i ℓ_i h_τ(t_n, |w_i|)
+//! ```
+//!
+//! The matrix depends on k only, so it is assembled and LU-factored once; every solver then
+//! works with right-hand sides. It is not symmetric (±G) but its symmetric part is positive
+//! definite, so the LU needs no pivoting for stability in practice; faer's sparse LU (COLAMD
+//! ordering, partial pivoting) is used.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::Lu;
+use faer::MatMut;
+
+use crate::error::Error;
+use crate::fem::sparse::CscMatrix;
+use crate::problem::Problem;
+
+/// The state carried from step to step, as full nodal vectors.
+#[derive(Debug, Clone)]
+pub struct State {
+    /// Time level n.
+    pub n: usize,
+    /// W_n: velocity, d per node.
+    pub w: Vec<f64>,
+    /// U_n = U_{n−1} + k W_n: displacement, d per node.
+    pub u: Vec<f64>,
+    /// Θ_n: temperature, one per node.
+    pub theta: Vec<f64>,
+    /// ξ_n: friction stress at each contact node, tangent coordinates.
+    pub xi: Vec<[f64; 2]>,
+}
+
+impl State {
+    /// The initial state (10): u₀, u₁ interpolated into E^h, θ₀ everywhere.
+    pub fn initial(problem: &Problem) -> Self {
+        let s = &problem.scenario;
+        let d = problem.dim();
+        let n_nodes = problem.mesh.n_nodes();
+        let uniform = |v: &[f64]| -> Vec<f64> {
+            let full: Vec<f64> = (0..n_nodes * d).map(|i| v[i % d]).collect();
+            problem.velocity.prolong(&problem.velocity.restrict_values(&full))
+        };
+        State {
+            n: 0,
+            w: uniform(&s.initial.velocity),
+            u: uniform(&s.initial.displacement),
+            theta: vec![s.initial.temperature; n_nodes],
+            xi: vec![[0.0; 2]; problem.contact.len()],
+        }
+    }
+}
+
+/// The factored step matrix and the right-hand side of Problem 14.
+pub struct StepSystem {
+    /// The reduced step matrix (kept for residual checks and the condensed solvers).
+    pub matrix: CscMatrix,
+    lu: Lu<usize, f64>,
+    /// Contributions of θ_D to the right-hand side (moved over from the matrix).
+    lift: Vec<f64>,
+    n_w: usize,
+    k: f64,
+}
+
+impl StepSystem {
+    /// Assembles the reduced step matrix for time step k and factors it.
+    pub fn new(problem: &Problem) -> Result<Self, Error> {
+        let k = problem.time_step();
+        let (vel, temp) = (&problem.velocity, &problem.temperature);
+        let n_w = vel.n_free;
+        let n = n_w + temp.n_free;
+        let mats = &problem.matrices;
+        let theta_d = &problem.theta_dirichlet;
+        let mut lift = vec![0.0; n];
+        let mut triplets = Vec::with_capacity(mats.mass.nnz() * 2 + mats.coupling.nnz() * 2 + mats.heat_mass.nnz());
+
+        // Mechanical block ℳ/k + 𝒦_A + k𝒦_B (the three share one pattern).
+        for (idx, (row, col, _)) in mats.mass.triplets().enumerate() {
+            let value = mats.mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
+            for &(r, a) in vel.row(row) {
+                for &(c, b) in vel.row(col) {
+                    triplets.push((r, c, a * b * value));
+                }
+            }
+        }
+        // Coupling G and −Gᵀ.
+        for (row, q, g) in mats.coupling.triplets() {
+            for &(r, a) in vel.row(row) {
+                match temp.free[q] {
+                    Some(c) => {
+                        triplets.push((r, n_w + c, a * g));
+                        triplets.push((n_w + c, r, -a * g));
+                    }
+                    None => lift[r] += a * g * theta_d[q],
+                }
+            }
+        }
+        // Thermal block ℳ_θ/k + 𝒦_θ.
+        for (idx, (p, q, _)) in mats.heat_mass.triplets().enumerate() {
+            let value = mats.heat_mass.values[idx] / k + mats.conduction.values[idx];
+            if let Some(r) = temp.free[p] {
+                match temp.free[q] {
+                    Some(c) => triplets.push((n_w + r, n_w + c, value)),
+                    None => lift[n_w + r] += value * theta_d[q],
+                }
+            }
+        }
+        let matrix = CscMatrix::from_triplets(n, n, triplets);
+        let lu = matrix
+            .to_faer()
+            .sp_lu()
+            .map_err(|e| Error::Factorization(format!("{e:?}")))?;
+        Ok(StepSystem {
+            matrix,
+            lu,
+            lift,
+            n_w,
+            k,
+        })
+    }
+
+    /// Number of unknowns.
+    pub fn n_unknowns(&self) -> usize {
+        self.matrix.n_rows
+    }
+
+    /// The right-hand side of step n without the contact terms:
+    /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
+    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Vec<f64> {
+        let mats = &problem.matrices;
+        let mut mech = problem.force(t);
+        mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
+        mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
+        let mut heat = problem.heat_load(t);
+        mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
+
+        let mut rhs = vec![0.0; self.n_unknowns()];
+        problem.velocity.restrict_add(&mech, &mut rhs[..self.n_w]);
+        for (p, free) in problem.temperature.free.iter().enumerate() {
+            if let Some(r) = free {
+                rhs[self.n_w + r] = heat[p];
+            }
+        }
+        rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
+        rhs
+    }
+
+    /// Solves A x = b in place.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let n = b.len();
+        self.lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
+    }
+
+    /// Solves A X = B in place for a column-major block of right-hand sides.
+    pub fn solve_block_in_place(&self, block: &mut [f64], n_cols: usize) {
+        let n = self.n_unknowns();
+        self.lu
+            .solve_in_place(MatMut::from_column_major_slice_mut(block, n, n_cols));
+    }
+
+    /// The new state from the solution x of step n.
+    pub fn state_from(&self, problem: &Problem, previous: &State, x: &[f64], xi: Vec<[f64; 2]>) -> State {
+        let w = problem.velocity.prolong(&x[..self.n_w]);
+        let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
+        let theta = problem
+            .temperature
+            .free
+            .iter()
+            .zip(&problem.theta_dirichlet)
+            .map(|(free, &fixed)| free.map_or(fixed, |r| x[self.n_w + r]))
+            .collect();
+        State {
+            n: previous.n + 1,
+            w,
+            u,
+            theta,
+            xi,
+        }
+    }
+}
+
+/// Adds the contact terms Σ ℓ_i ξ_i · v_τ (velocity rows) and Σ ℓ_i h_i η (temperature rows of
+/// free contact nodes) to a right-hand side.
+pub fn add_contact_terms(problem: &Problem, n_w: usize, xi: &[[f64; 2]], heat: &[f64], rhs: &mut [f64]) {
+    let tangential = problem.dim() - 1;
+    for (i, node) in problem.contact.iter().enumerate() {
+        for k in 0..tangential {
+            rhs[node.tangent_dofs[k]] += node.weight * xi[i][k];
+        }
+        if let Some(r) = node.theta_dof {
+            rhs[n_w + r] += node.weight * heat[i];
+        }
+    }
+}
+
+/// Tangential velocities w_τ at the contact nodes, in tangent coordinates, read from x.
+pub fn tangential_velocities(problem: &Problem, x: &[f64]) -> Vec<[f64; 2]> {
+    let tangential = problem.dim() - 1;
+    problem
+        .contact
+        .iter()
+        .map(|node| {
+            let mut w = [0.0; 2];
+            for k in 0..tangential {
+                w[k] = x[node.tangent_dofs[k]];
+            }
+            w
+        })
+        .collect()
+}
+
+/// |v| of a tangent-coordinate vector.
+pub fn norm2(v: &[f64; 2]) -> f64 {
+    v[0].hypot(v[1])
+}

@@ -1,0 +1,101 @@
+//! Time stepping: t_n = n k, n = 1..N, each step solved by the chosen nonsmooth solver, with
+//! u_n = u_{n−1} + k w_n (eq. (57)) carried in [`State`].
+
+use serde::Serialize;
+
+use crate::error::Error;
+use crate::problem::Problem;
+use crate::scenario::SolverKind;
+use crate::solver::paper::{PaperParams, PaperSolver};
+use crate::solver::system::{norm2, State, StepSystem};
+use crate::solver::StepInfo;
+
+/// The contact state at one node of Γ_C.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ContactRow {
+    /// Mesh node.
+    pub node: usize,
+    /// Position in the reference configuration.
+    pub x: [f64; 3],
+    /// w_τ in tangent coordinates (2D: the x component for the paper's Γ_C).
+    pub w_tau: [f64; 2],
+    /// ξ, the friction stress, in tangent coordinates.
+    pub xi: [f64; 2],
+    /// The friction bound μ(|w_τ|) S at this node.
+    pub bound: f64,
+    /// |w_τ| > slip tolerance.
+    pub slip: bool,
+    /// θ at the node.
+    pub theta: f64,
+}
+
+/// The contact rows of a state; a node slips when |w_τ| exceeds `slip_tolerance`.
+pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Vec<ContactRow> {
+    let w_tau = crate::solver::paper::contact_tangential(problem, &state.w);
+    problem
+        .contact
+        .iter()
+        .zip(w_tau)
+        .zip(&state.xi)
+        .map(|((node, w), xi)| {
+            let speed = norm2(&w);
+            ContactRow {
+                node: node.node,
+                x: problem.mesh.coords[node.node],
+                w_tau: w,
+                xi: *xi,
+                bound: problem.friction.bound(speed),
+                slip: speed > slip_tolerance,
+                theta: state.theta[node.node],
+            }
+        })
+        .collect()
+}
+
+/// A nonsmooth solver of one time step, chosen by the scenario.
+pub enum StepSolver<'a> {
+    /// The paper's convexification + augmented Lagrangian.
+    Paper(PaperSolver<'a>),
+}
+
+impl<'a> StepSolver<'a> {
+    /// The solver the scenario asks for.
+    pub fn new(problem: &'a Problem, system: &'a StepSystem) -> Self {
+        let s = &problem.scenario.solver;
+        match s.kind {
+            SolverKind::Paper => StepSolver::Paper(PaperSolver::new(
+                problem,
+                system,
+                PaperParams {
+                    tolerance: s.tolerance,
+                    max_convexification: s.max_convexification,
+                    inner_tolerance: s.inner_tolerance,
+                    max_inner: s.max_inner,
+                },
+            )),
+        }
+    }
+
+    /// One step from t_{n−1} to t_n.
+    pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
+        match self {
+            StepSolver::Paper(solver) => solver.step(previous),
+        }
+    }
+}
+
+/// Runs all N steps from the initial state; `observer` sees every new state.
+pub fn run(
+    problem: &Problem,
+    system: &StepSystem,
+    mut observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
+) -> Result<State, Error> {
+    let solver = StepSolver::new(problem, system);
+    let mut state = State::initial(problem);
+    for _ in 0..problem.scenario.time.steps {
+        let (next, info) = solver.step(&state)?;
+        observer(&next, &info)?;
+        state = next;
+    }
+    Ok(state)
+}
