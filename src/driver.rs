@@ -1,0 +1,340 @@
+//! A whole run, as the `run` command does it: make the problem discrete, factor, step through
+//! time, write the results, and account for the time spent.
+//!
+//! ```text
+//! assemble (Problem::new) → factor (StepSystem::new) → set the solver up → N steps → outputs
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use crate::error::Error;
+use crate::output::{self, fields, Field, Grid, PvdEntry};
+use crate::problem::Problem;
+use crate::scenario::Scenario;
+use crate::solver::system::{State, StepSystem};
+use crate::time::{self, contact_rows, ContactRow, StepSolver};
+
+/// How to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Where to write results; `None` writes nothing.
+    pub out_dir: Option<PathBuf>,
+    /// Draw a progress bar on stderr.
+    pub progress: bool,
+}
+
+/// Wall time per phase, in seconds.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Timings {
+    /// Mesh, spaces, matrices and loads.
+    pub assembly: f64,
+    /// Reduced step matrix and its sparse LU.
+    pub factorization: f64,
+    /// Solver set-up (condensation onto Γ_C).
+    pub solver_setup: f64,
+    /// The time loop without output.
+    pub time_stepping: f64,
+    /// Writing files.
+    pub output: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// The contact state at one output time.
+#[derive(Debug, Clone, Serialize)]
+pub struct OutputRecord {
+    /// Time level n.
+    pub n: usize,
+    /// t_n.
+    pub t: f64,
+    /// Contact nodes with |w_τ| > slip tolerance.
+    pub slip_nodes: usize,
+    /// The other contact nodes.
+    pub stick_nodes: usize,
+    /// Largest |w_τ| on Γ_C.
+    pub max_slip_rate: f64,
+    /// Temperature range over Ω.
+    pub min_temperature: f64,
+    pub max_temperature: f64,
+    /// Largest |u| over Ω.
+    pub max_displacement: f64,
+    /// ‖u_n‖_E.
+    pub energy_norm_u: f64,
+    /// Contact rows (not serialized; in the CSV files).
+    #[serde(skip)]
+    pub contact: Vec<ContactRow>,
+}
+
+/// Everything `summary.json` holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub dim: usize,
+    pub nodes: usize,
+    pub elements: usize,
+    pub velocity_unknowns: usize,
+    pub temperature_unknowns: usize,
+    pub unknowns: usize,
+    pub contact_nodes: usize,
+    pub steps: usize,
+    pub time_step: f64,
+    pub solver: String,
+    pub slip_tolerance: f64,
+    pub convexification_iterations: usize,
+    pub inner_iterations: usize,
+    pub max_convexification_per_step: usize,
+    pub timings: Timings,
+    pub outputs: Vec<OutputRecord>,
+}
+
+/// Runs a scenario end to end.
+pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> {
+    let start = Instant::now();
+    let mut timings = Timings::default();
+    let problem = Problem::new(scenario)?;
+    timings.assembly = start.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
+    let system = StepSystem::new(&problem)?;
+    timings.factorization = clock.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
+    let solver = StepSolver::new(&problem, &system);
+    timings.solver_setup = clock.elapsed().as_secs_f64();
+
+    if let Some(dir) = &options.out_dir {
+        std::fs::create_dir_all(dir).map_err(|source| output::OutputError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml().as_bytes()).map_err(|source| {
+            output::OutputError::Io {
+                path: dir.join("scenario.toml"),
+                source,
+            }
+        })?;
+    }
+
+    let n_steps = scenario.time.steps;
+    let bar = if options.progress {
+        ProgressBar::new(n_steps as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} step {pos}/{len} [{bar:30}] {elapsed_precise} (eta {eta}) {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let output_steps = scenario.output_steps();
+    let slip_tolerance = scenario.solver.slip_tolerance;
+    let mut outputs = Vec::new();
+    let mut pvd = Vec::new();
+    let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
+    let mut output_time = 0.0;
+    let mut state = State::initial(&problem);
+    let loop_clock = Instant::now();
+    for _ in 0..n_steps {
+        let (next, info) = solver.step(&state).inspect_err(|_| bar.abandon())?;
+        state = next;
+        outer_total += info.convexification_iterations;
+        inner_total += info.inner_iterations;
+        outer_max = outer_max.max(info.convexification_iterations);
+        bar.inc(1);
+        if output_steps.contains(&state.n) {
+            let clock = Instant::now();
+            let record = record(&problem, &state, slip_tolerance);
+            bar.set_message(format!(
+                "t = {:.3}: {} slip, {} stick",
+                record.t, record.slip_nodes, record.stick_nodes
+            ));
+            if let Some(dir) = &options.out_dir {
+                write_snapshot(&problem, &state, &record, dir, &mut pvd)?;
+            }
+            outputs.push(record);
+            output_time += clock.elapsed().as_secs_f64();
+        }
+    }
+    bar.finish_and_clear();
+    timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
+
+    let mut summary = Summary {
+        dim: problem.dim(),
+        nodes: problem.mesh.n_nodes(),
+        elements: problem.mesh.n_cells(),
+        velocity_unknowns: problem.velocity.n_free,
+        temperature_unknowns: problem.temperature.n_free,
+        unknowns: problem.n_unknowns(),
+        contact_nodes: problem.contact.len(),
+        steps: n_steps,
+        time_step: problem.time_step(),
+        solver: format!("{:?}", scenario.solver.kind).to_lowercase(),
+        slip_tolerance,
+        convexification_iterations: outer_total,
+        inner_iterations: inner_total,
+        max_convexification_per_step: outer_max,
+        timings,
+        outputs,
+    };
+    if let Some(dir) = &options.out_dir {
+        let clock = Instant::now();
+        if scenario.output.vtk {
+            output::write_pvd(&dir.join("solution.pvd"), &pvd)?;
+        }
+        summary.timings.output = output_time + clock.elapsed().as_secs_f64();
+        summary.timings.total = start.elapsed().as_secs_f64();
+        let json = serde_json::to_vec_pretty(&summary).expect("a summary serializes");
+        output::write_atomic(&dir.join("summary.json"), &json).map_err(|source| output::OutputError::Io {
+            path: dir.join("summary.json"),
+            source,
+        })?;
+    } else {
+        summary.timings.output = output_time;
+        summary.timings.total = start.elapsed().as_secs_f64();
+    }
+    Ok(summary)
+}
+
+/// The figures of one output time.
+pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRecord {
+    let contact = contact_rows(problem, state, slip_tolerance);
+    let slip_nodes = contact.iter().filter(|r| r.slip).count();
+    let d = problem.dim();
+    let max_displacement = state
+        .u
+        .chunks_exact(d)
+        .map(|v| v.iter().map(|x| x * x).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    OutputRecord {
+        n: state.n,
+        t: state.n as f64 * problem.time_step(),
+        slip_nodes,
+        stick_nodes: contact.len() - slip_nodes,
+        max_slip_rate: contact.iter().map(|r| r.w_tau[0].hypot(r.w_tau[1])).fold(0.0, f64::max),
+        min_temperature: state.theta.iter().cloned().fold(f64::INFINITY, f64::min),
+        max_temperature: state.theta.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        max_displacement,
+        energy_norm_u: crate::norms::energy(&problem.matrices, &state.u),
+        contact,
+    }
+}
+
+/// Header of the contact CSV files.
+pub fn contact_csv_header(dim: usize) -> Vec<&'static str> {
+    if dim == 2 {
+        vec!["x", "y", "w_tau", "xi", "bound", "slip", "theta"]
+    } else {
+        vec![
+            "x", "y", "z", "w_tau1", "w_tau2", "xi1", "xi2", "bound", "slip", "theta",
+        ]
+    }
+}
+
+/// The contact CSV rows: position, w_τ, ξ, friction bound, slip (1) or stick (0), θ.
+pub fn contact_csv_rows(dim: usize, rows: &[ContactRow]) -> Vec<Vec<f64>> {
+    rows.iter()
+        .map(|r| {
+            let mut v: Vec<f64> = r.x[..dim].to_vec();
+            v.extend_from_slice(&r.w_tau[..dim - 1]);
+            v.extend_from_slice(&r.xi[..dim - 1]);
+            v.extend([r.bound, if r.slip { 1.0 } else { 0.0 }, r.theta]);
+            v
+        })
+        .collect()
+}
+
+fn write_snapshot(
+    problem: &Problem,
+    state: &State,
+    record: &OutputRecord,
+    dir: &Path,
+    pvd: &mut Vec<PvdEntry>,
+) -> Result<(), Error> {
+    let scenario = &problem.scenario;
+    let d = problem.dim();
+    if scenario.output.csv {
+        let path = dir.join(format!("contact_{:04}.csv", state.n));
+        output::write_csv(&path, &contact_csv_header(d), &contact_csv_rows(d, &record.contact))?;
+    }
+    if scenario.output.vtk {
+        let file = format!("solution_{:04}.vtu", state.n);
+        let stress = fields::cell_stress(problem, state);
+        let (status, friction) = fields::nodal_contact_fields(problem, &record.contact);
+        let grid = Grid {
+            dim: d,
+            points: &problem.mesh.coords,
+            cells: &problem.mesh.cells,
+        };
+        let point_fields = [
+            Field {
+                name: "displacement",
+                n_components: d,
+                values: &state.u,
+            },
+            Field {
+                name: "velocity",
+                n_components: d,
+                values: &state.w,
+            },
+            Field {
+                name: "temperature",
+                n_components: 1,
+                values: &state.theta,
+            },
+            Field {
+                name: "contact_status",
+                n_components: 1,
+                values: &status,
+            },
+            Field {
+                name: "friction_stress",
+                n_components: d,
+                values: &friction,
+            },
+        ];
+        let cell_fields = [Field {
+            name: "stress",
+            n_components: fields::stress_components(d).len(),
+            values: &stress,
+        }];
+        output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields)?;
+        pvd.push(PvdEntry { time: record.t, file });
+    }
+    Ok(())
+}
+
+/// Runs without writing files (tests and studies).
+pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
+    let problem = Problem::new(scenario)?;
+    let system = StepSystem::new(&problem)?;
+    let output_steps = scenario.output_steps();
+    let mut outputs = Vec::new();
+    let last = time::run(&problem, &system, |state, _| {
+        if output_steps.contains(&state.n) {
+            outputs.push(record(&problem, state, scenario.solver.slip_tolerance));
+        }
+        Ok(())
+    })?;
+    let summary = Summary {
+        dim: problem.dim(),
+        nodes: problem.mesh.n_nodes(),
+        elements: problem.mesh.n_cells(),
+        velocity_unknowns: problem.velocity.n_free,
+        temperature_unknowns: problem.temperature.n_free,
+        unknowns: problem.n_unknowns(),
+        contact_nodes: problem.contact.len(),
+        steps: scenario.time.steps,
+        time_step: problem.time_step(),
+        solver: format!("{:?}", scenario.solver.kind).to_lowercase(),
+        slip_tolerance: scenario.solver.slip_tolerance,
+        convexification_iterations: 0,
+        inner_iterations: 0,
+        max_convexification_per_step: 0,
+        timings: Timings::default(),
+        outputs,
+    };
+    Ok((summary, last))
+}

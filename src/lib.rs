@@ -1,0 +1,58 @@
+//! # thermocontact
+//!
+//! Dynamic bilateral frictional contact of a thermo-viscoelastic body with a nonmonotone
+//! (slip-weakening) friction law, discretized as in Bartosz, Danan & Szafraniec, *Numerical
+//! analysis of a dynamic bilateral thermoviscoelastic contact problem with nonmonotone friction
+//! law*, Comput. Math. Appl. 73 (2017) 727–746.
+//!
+//! ## The model (Problem 2)
+//!
+//! ```text
+//! (1)  σ = 𝒜ε(u̇) + ℬε(u) + Cθ                  (2)  ρü = Div σ + f₀
+//! (3)  ρ c_p θ̇ − div(K∇θ) = c_ij ∂u̇_i/∂x_j + g
+//! (4)  σν = f₂ on Γ_N   (5) u = 0 on Γ_D   (6) θ = θ_D on Γ_D ∪ Γ_N
+//! (7)  u_ν = 0 on Γ_C   (8) −σ_τ ∈ ∂j_τ(u̇_τ)   (9) −K∇θ·ν ∈ ∂j(θ) − h_τ(‖u̇_τ‖)
+//! ```
+//!
+//! ## The scheme (Problem 14) and the solver (Problem 17)
+//!
+//! P1 elements for the velocity w and the temperature θ, backward Euler in time with step k,
+//! u_n = u_{n−1} + k w_n. Each step is one linear system with a constant matrix
+//! ([`solver::system::StepSystem`], factored once) plus the nonsmooth laws on Γ_C, solved by the
+//! convexification loop with an augmented-Lagrangian inner solver ([`solver::paper`]).
+//!
+//! ## Glossary (paper symbol → identifier)
+//!
+//! | symbol | identifier | meaning |
+//! |---|---|---|
+//! | w, u, θ | `w`, `u`, `theta` | velocity, displacement, temperature |
+//! | ξ, ζ | `xi`, `zeta` | friction stress, heat-exchange multiplier on Γ_C |
+//! | k, n, m | `k` / `time_step`, `n`, `m` | time step, time level, convexification iterate |
+//! | ℓ_i | `weight` | nodal quadrature weight ∫_ΓC φ_i |
+//! | μ(r) S | `bound` | friction bound at slip rate r |
+//! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
+//! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of MODEL.md |
+//!
+//! ## Module map
+//!
+//! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
+//! [`contact`] (laws) → [`problem`] (a scenario made discrete) → [`solver`] (step system and
+//! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
+//! the input, [`norms`] measures.
+
+pub mod contact;
+pub mod driver;
+pub mod error;
+pub mod fem;
+pub mod material;
+pub mod mesh;
+pub mod norms;
+pub mod output;
+pub mod problem;
+pub mod scenario;
+pub mod solver;
+pub mod time;
+
+pub use error::Error;
+pub use problem::Problem;
+pub use scenario::Scenario;

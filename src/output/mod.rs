@@ -1,0 +1,42 @@
+//! Output layer: VTK XML unstructured grids (`.vtu`) plus PVD collections for
+//! ParaView time series, CSV tables, and raw bytes (e.g. serialized JSON).
+//!
+//! Every file goes through [`atomic::write_atomic`], so a crash or an error
+//! mid-write never leaves a truncated result behind: each output file is
+//! either the previous version or the complete new one.
+
+use std::path::{Path, PathBuf};
+
+pub mod atomic;
+pub mod csv;
+pub mod fields;
+pub mod vtk;
+
+pub use atomic::{write_atomic, write_atomic_with};
+pub use csv::{csv_bytes, write_csv};
+pub use vtk::{vtu_bytes, write_pvd, write_vtu, Field, Grid, PvdEntry};
+
+/// Errors of the output layer.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("invalid VTK data: {0}")]
+    Vtk(String),
+    #[error("`{field}` has {found} values, expected {expected}")]
+    Shape {
+        field: String,
+        expected: usize,
+        found: usize,
+    },
+}
+
+impl OutputError {
+    /// Adapter for `map_err` that attaches the path being written.
+    pub(crate) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Self + '_ {
+        move |source| OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! The command line as a user meets it: files written, errors named, exit codes.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermocontact-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn run_writes_summary_vtk_series_and_contact_csvs() {
+    let out = scratch("run");
+    let status = bin()
+        .args(["run", "--quiet", "--set", "mesh.nx=16", "--set", "mesh.ny=4", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(stdout.contains("wall time"), "{stdout}");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let outputs = summary["outputs"].as_array().unwrap();
+    let times: Vec<f64> = outputs.iter().map(|o| o["t"].as_f64().unwrap()).collect();
+    assert_eq!(times, vec![0.25, 0.5, 0.75, 1.0]);
+    for o in outputs {
+        let n = o["n"].as_u64().unwrap();
+        assert!(out.join(format!("solution_{n:04}.vtu")).is_file());
+        let csv = std::fs::read_to_string(out.join(format!("contact_{n:04}.csv"))).unwrap();
+        let slip_in_csv = csv.lines().skip(1).filter(|l| l.split(',').nth(5) == Some("1")).count();
+        assert_eq!(slip_in_csv as u64, o["slip_nodes"].as_u64().unwrap());
+        assert_eq!(
+            csv.lines().count() - 1,
+            summary["contact_nodes"].as_u64().unwrap() as usize
+        );
+    }
+    let pvd = std::fs::read_to_string(out.join("solution.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 4);
+    // The resolved scenario is saved and loads back to the same run.
+    let saved = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let again = thermocontact::Scenario::load(Some(&saved), &[]).unwrap();
+    assert_eq!(again.mesh.nx, 16);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn bad_scenario_keys_and_values_exit_non_zero_naming_the_key() {
+    let out = scratch("bad");
+    let result = bin()
+        .args(["run", "--quiet", "--set", "solver.tolerence=1e-6", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("solver.tolerence"), "{stderr}");
+    assert!(!out.exists(), "nothing is written for an invalid scenario");
+
+    let file = std::env::temp_dir().join(format!("thermocontact-bad-{}.toml", std::process::id()));
+    std::fs::write(&file, "[time]\nsteps = -4\n").unwrap();
+    let result = bin()
+        .args(["run", "--quiet"])
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("time.steps") && stderr.contains("-4"), "{stderr}");
+    std::fs::remove_file(&file).ok();
+}
+
+#[test]
+fn scenario_prints_the_default_as_a_loadable_file() {
+    let result = bin().arg("scenario").output().unwrap();
+    assert!(result.status.success());
+    let text = String::from_utf8(result.stdout).unwrap();
+    assert!(text.contains("# thermocontact scenario"));
+    assert_eq!(
+        thermocontact::Scenario::load(Some(&text), &[]).unwrap(),
+        thermocontact::Scenario::default()
+    );
+}
+
+#[test]
+fn readme_shows_the_default_scenario_verbatim() {
+    let readme = include_str!("../README.md");
+    assert!(readme.contains(thermocontact::scenario::DEFAULT_TOML), "README's scenario example is out of date");
+    assert!(include_str!("../.ci/run").contains("cargo test"), ".ci/run runs the README's test command");
+}
