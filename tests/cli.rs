@@ -91,6 +91,12 @@ fn scenario_prints_the_default_as_a_loadable_file() {
 #[test]
 fn readme_shows_the_default_scenario_verbatim() {
     let readme = include_str!("../README.md");
-    assert!(readme.contains(thermocontact::scenario::DEFAULT_TOML), "README's scenario example is out of date");
-    assert!(include_str!("../.ci/run").contains("cargo test"), ".ci/run runs the README's test command");
+    assert!(
+        readme.contains(thermocontact::scenario::DEFAULT_TOML),
+        "README's scenario example is out of date"
+    );
+    assert!(
+        include_str!("../.ci/run").contains("cargo test"),
+        ".ci/run runs the README's test command"
+    );
 }
