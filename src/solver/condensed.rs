@@ -13,7 +13,7 @@
 //! matrices computed once per run with blocks of right-hand sides; the nonsmooth iterations then
 //! cost dense products on Γ_C only, and the full fields need one solve per outer iterate.
 
-use super::system::{add_contact_terms, tangential_velocities, StepSystem};
+use super::system::StepSystem;
 use crate::problem::Problem;
 
 /// The contact compliances C (friction → w_τ) and H (heat → w_τ), dense, row-major.
@@ -30,39 +30,41 @@ pub struct Condensation {
 }
 
 impl Condensation {
-    /// Computes C and H with block solves, in chunks that keep the block under ~256 MB.
+    /// Computes C and H with one block of n_t solves with the symmetric form S = J A, in chunks
+    /// that keep the block under ~256 MB.
+    ///
+    /// A⁻¹ = S⁻¹ J, J = diag(I, −I); with X = S⁻¹ E_wᵀ, symmetry of S gives both blocks:
+    /// C = E_w X ℓ and H = −(E_θ X)ᵀ ℓ.
     pub fn new(problem: &Problem, system: &StepSystem) -> Self {
         let tangential = problem.dim() - 1;
         let n_contact = problem.contact.len();
         let n_t = n_contact * tangential;
-        let n_cols = n_t + n_contact;
         let n = system.n_unknowns();
-        let n_w = problem.n_w();
+        let n_w = system.n_w();
         let chunk = ((256usize << 20) / (8 * n.max(1))).clamp(1, 256);
         let mut friction = vec![0.0; n_t * n_t];
         let mut heat = vec![0.0; n_t * n_contact];
+        let tangent_dof = |col: usize| problem.contact[col / tangential].tangent_dofs[col % tangential];
         let mut block = Vec::new();
         let mut start = 0;
-        while start < n_cols {
-            let width = chunk.min(n_cols - start);
+        while start < n_t {
+            let width = chunk.min(n_t - start);
             block.clear();
             block.resize(n * width, 0.0);
-            for (j, col) in block.chunks_exact_mut(n).enumerate() {
-                let (xi, h) = unit_load(start + j, n_contact, tangential);
-                add_contact_terms(problem, n_w, &xi, &h, col);
+            for (j, column) in block.chunks_exact_mut(n).enumerate() {
+                column[tangent_dof(start + j)] = 1.0;
             }
-            system.solve_block_in_place(&mut block, width);
-            for (j, col) in block.chunks_exact(n).enumerate() {
-                let w = tangential_velocities(problem, col);
-                let global = start + j;
-                for i in 0..n_contact {
-                    for k in 0..tangential {
-                        let row = i * tangential + k;
-                        if global < n_t {
-                            friction[row * n_t + global] = w[i][k];
-                        } else {
-                            heat[row * n_contact + (global - n_t)] = w[i][k];
-                        }
+            system.solve_symmetric_block_in_place(&mut block, width);
+            for (j, column) in block.chunks_exact(n).enumerate() {
+                let col = start + j;
+                for row in 0..n_t {
+                    let weight = problem.contact[col / tangential].weight;
+                    friction[row * n_t + col] = column[tangent_dof(row)] * weight;
+                }
+                // (E_θ X)[i][col] is the entry H[col][i] up to −ℓ_i.
+                for (i, node) in problem.contact.iter().enumerate() {
+                    if let Some(r) = node.theta_dof {
+                        heat[col * n_contact + i] = -column[n_w + r] * node.weight;
                     }
                 }
             }
@@ -110,19 +112,6 @@ impl Condensation {
         }
         estimate
     }
-}
-
-/// The unit load of column `col`: a unit ξ component (col < n_t) or a unit nodal heat.
-fn unit_load(col: usize, n_contact: usize, tangential: usize) -> (Vec<[f64; 2]>, Vec<f64>) {
-    let mut xi = vec![[0.0; 2]; n_contact];
-    let mut heat = vec![0.0; n_contact];
-    let n_t = n_contact * tangential;
-    if col < n_t {
-        xi[col / tangential][col % tangential] = 1.0;
-    } else {
-        heat[col - n_t] = 1.0;
-    }
-    (xi, heat)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

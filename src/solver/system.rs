@@ -7,15 +7,16 @@
 //! −Gᵀ W_n + (ℳ_θ/k + 𝒦_θ) Θ_n       = ℳ_θ Θ_{n−1}/k + G_n + Σ_i ℓ_i h_τ(t_n, |w_i|)
 //! ```
 //!
-//! The matrix depends on k only, so it is assembled and LU-factored once; every solver then
-//! works with right-hand sides. It is not symmetric (±G) but its symmetric part is positive
-//! definite, so the LU needs no pivoting for stability in practice; faer's sparse LU (COLAMD
-//! ordering, partial pivoting) is used.
+//! The matrix depends on k only, so it is assembled and factored once; every solver then works
+//! with right-hand sides. It is not symmetric (±G); its sign-flipped form S = J A is symmetric
+//! quasi-definite and is what gets factored ([`super::factor`]).
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Lu;
-use faer::MatMut;
+use std::cell::Cell;
+use std::time::Instant;
 
+use serde::Serialize;
+
+use super::factor::QuasiDefiniteLdlt;
 use crate::error::Error;
 use crate::fem::sparse::CscMatrix;
 use crate::problem::Problem;
@@ -55,11 +56,25 @@ impl State {
     }
 }
 
+/// Work done with a [`StepSystem`].
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SystemStats {
+    /// Right-hand sides solved (a block of m columns counts m).
+    pub solves: usize,
+    /// Seconds in sparse triangular solves.
+    pub solve_seconds: f64,
+    /// Seconds building right-hand sides.
+    pub rhs_seconds: f64,
+}
+
 /// The factored step matrix and the right-hand side of Problem 14.
 pub struct StepSystem {
-    /// The reduced step matrix (kept for residual checks and the condensed solvers).
+    /// S = J A, the symmetric form of the reduced step matrix (rows of the temperature
+    /// equations negated).
     pub matrix: CscMatrix,
-    lu: Lu<usize, f64>,
+    /// Work counters: solves (right-hand sides) and seconds spent in them and in `rhs`.
+    stats: Cell<SystemStats>,
+    factor: QuasiDefiniteLdlt,
     /// Contributions of θ_D to the right-hand side (moved over from the matrix).
     lift: Vec<f64>,
     n_w: usize,
@@ -92,8 +107,9 @@ impl StepSystem {
             for &(r, a) in vel.row(row) {
                 match temp.free[q] {
                     Some(c) => {
+                        // G in the velocity rows; −(−Gᵀ) = Gᵀ in the (negated) temperature rows.
                         triplets.push((r, n_w + c, a * g));
-                        triplets.push((n_w + c, r, -a * g));
+                        triplets.push((n_w + c, r, a * g));
                     }
                     None => lift[r] += a * g * theta_d[q],
                 }
@@ -104,22 +120,20 @@ impl StepSystem {
             let value = mats.heat_mass.values[idx] / k + mats.conduction.values[idx];
             if let Some(r) = temp.free[p] {
                 match temp.free[q] {
-                    Some(c) => triplets.push((n_w + r, n_w + c, value)),
+                    Some(c) => triplets.push((n_w + r, n_w + c, -value)),
                     None => lift[n_w + r] += value * theta_d[q],
                 }
             }
         }
         let matrix = CscMatrix::from_triplets(n, n, triplets);
-        let lu = matrix
-            .to_faer()
-            .sp_lu()
-            .map_err(|e| Error::Factorization(format!("{e:?}")))?;
+        let factor = QuasiDefiniteLdlt::new(&matrix)?;
         Ok(StepSystem {
             matrix,
-            lu,
+            factor,
             lift,
             n_w,
             k,
+            stats: Cell::new(SystemStats::default()),
         })
     }
 
@@ -131,6 +145,7 @@ impl StepSystem {
     /// The right-hand side of step n without the contact terms:
     /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
     pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Vec<f64> {
+        let clock = Instant::now();
         let mats = &problem.matrices;
         let mut mech = problem.force(t);
         mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
@@ -146,20 +161,51 @@ impl StepSystem {
             }
         }
         rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
+        self.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
         rhs
     }
 
-    /// Solves A x = b in place.
-    pub fn solve_in_place(&self, b: &mut [f64]) {
-        let n = b.len();
-        self.lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
+    /// The work counters so far.
+    pub fn stats(&self) -> SystemStats {
+        self.stats.get()
     }
 
-    /// Solves A X = B in place for a column-major block of right-hand sides.
-    pub fn solve_block_in_place(&self, block: &mut [f64], n_cols: usize) {
-        let n = self.n_unknowns();
-        self.lu
-            .solve_in_place(MatMut::from_column_major_slice_mut(block, n, n_cols));
+    fn count(&self, update: impl FnOnce(&mut SystemStats)) {
+        let mut stats = self.stats.get();
+        update(&mut stats);
+        self.stats.set(stats);
+    }
+
+    /// Number of velocity unknowns (the first block of x).
+    pub fn n_w(&self) -> usize {
+        self.n_w
+    }
+
+    /// Stored entries of the LDLᵀ factor.
+    pub fn factor_nnz(&self) -> usize {
+        self.factor.factor_nnz()
+    }
+
+    /// Solves A x = b in place (as S x = J b).
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        let clock = Instant::now();
+        b[self.n_w..].iter_mut().for_each(|v| *v = -*v);
+        self.factor.solve_in_place(b, 1);
+        self.count(|s| {
+            s.solves += 1;
+            s.solve_seconds += clock.elapsed().as_secs_f64();
+        });
+    }
+
+    /// Solves the symmetric system S X = B in place for a column-major block of right-hand sides
+    /// (S = J A; see [`super::factor`]).
+    pub fn solve_symmetric_block_in_place(&self, block: &mut [f64], n_cols: usize) {
+        let clock = Instant::now();
+        self.factor.solve_in_place(block, n_cols);
+        self.count(|s| {
+            s.solves += n_cols;
+            s.solve_seconds += clock.elapsed().as_secs_f64();
+        });
     }
 
     /// The new state from the solution x of step n.
