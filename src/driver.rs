@@ -38,6 +38,12 @@ pub struct Timings {
     pub solver_setup: f64,
     /// The time loop without output.
     pub time_stepping: f64,
+    /// Of which: sparse solves with the factored step matrix (in the loop).
+    pub linear_solves: f64,
+    /// Of which: building right-hand sides.
+    pub right_hand_sides: f64,
+    /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest).
+    pub contact_solver: f64,
     /// Writing files.
     pub output: f64,
     /// Everything.
@@ -86,6 +92,12 @@ pub struct Summary {
     pub convexification_iterations: usize,
     pub inner_iterations: usize,
     pub max_convexification_per_step: usize,
+    /// Semismooth Newton iterations (fast solver).
+    pub newton_iterations: usize,
+    /// Steps in which the fast solver fell back to the paper's solver.
+    pub fallback_steps: usize,
+    /// Sparse solves in the time loop.
+    pub linear_solves: usize,
     pub timings: Timings,
     pub outputs: Vec<OutputRecord>,
 }
@@ -104,6 +116,7 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
     let clock = Instant::now();
     let solver = StepSolver::new(&problem, &system);
     timings.solver_setup = clock.elapsed().as_secs_f64();
+    let setup_stats = system.stats();
 
     if let Some(dir) = &options.out_dir {
         std::fs::create_dir_all(dir).map_err(|source| output::OutputError::Io {
@@ -134,6 +147,7 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
     let mut outputs = Vec::new();
     let mut pvd = Vec::new();
     let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
+    let (mut newton_total, mut fallbacks) = (0, 0);
     let mut output_time = 0.0;
     let mut state = State::initial(&problem);
     let loop_clock = Instant::now();
@@ -143,6 +157,8 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
         outer_total += info.convexification_iterations;
         inner_total += info.inner_iterations;
         outer_max = outer_max.max(info.convexification_iterations);
+        newton_total += info.newton_iterations;
+        fallbacks += usize::from(info.fallback);
         bar.inc(1);
         if output_steps.contains(&state.n) {
             let clock = Instant::now();
@@ -160,6 +176,11 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
     }
     bar.finish_and_clear();
     timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
+    let loop_stats = system.stats();
+    timings.linear_solves = loop_stats.solve_seconds - setup_stats.solve_seconds;
+    timings.right_hand_sides = loop_stats.rhs_seconds - setup_stats.rhs_seconds;
+    timings.contact_solver = timings.time_stepping - timings.linear_solves - timings.right_hand_sides;
+    let loop_solves = loop_stats.solves - setup_stats.solves;
 
     let mut summary = Summary {
         dim: problem.dim(),
@@ -176,6 +197,9 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
         convexification_iterations: outer_total,
         inner_iterations: inner_total,
         max_convexification_per_step: outer_max,
+        newton_iterations: newton_total,
+        fallback_steps: fallbacks,
+        linear_solves: loop_solves,
         timings,
         outputs,
     };
@@ -333,6 +357,9 @@ pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
         convexification_iterations: 0,
         inner_iterations: 0,
         max_convexification_per_step: 0,
+        newton_iterations: 0,
+        fallback_steps: 0,
+        linear_solves: 0,
         timings: Timings::default(),
         outputs,
     };

@@ -148,6 +148,8 @@ pub struct HeatExchangeSpec {
 pub enum SolverKind {
     /// Convexification loop + Uzawa augmented Lagrangian (Problem 17).
     Paper,
+    /// Semismooth Newton on the condensed nonmonotone law, the paper's solver as fallback.
+    Fast,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -467,7 +469,7 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
 }
 
 /// Lays `user` over `base`, key by key. A key unknown to the base is an error naming its path. A
-/// table whose `law` (or `kind`) changes is replaced whole, since its keys depend on the law.
+/// table whose `law` changes is replaced whole, since its keys depend on the law.
 fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
     for (key, value) in user {
         let path = if prefix.is_empty() {
@@ -484,7 +486,7 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
         };
         match (slot, value) {
             (Value::Table(b), Value::Table(u)) => {
-                let tag = ["law", "kind"].into_iter().find(|t| b.contains_key(*t));
+                let tag = ["law"].into_iter().find(|t| b.contains_key(*t));
                 let replaced = tag.is_some_and(|t| u.get(t).is_some_and(|v| Some(v) != b.get(t)));
                 if replaced {
                     *b = u;

@@ -6,6 +6,8 @@ use serde::Serialize;
 use crate::error::Error;
 use crate::problem::Problem;
 use crate::scenario::SolverKind;
+use crate::solver::fast::FastSolver;
+use crate::solver::newton::NewtonParams;
 use crate::solver::paper::{PaperParams, PaperSolver};
 use crate::solver::system::{norm2, State, StepSystem};
 use crate::solver::StepInfo;
@@ -56,21 +58,31 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
 pub enum StepSolver<'a> {
     /// The paper's convexification + augmented Lagrangian.
     Paper(PaperSolver<'a>),
+    /// Semismooth Newton on the condensed problem.
+    Fast(FastSolver<'a>),
 }
 
 impl<'a> StepSolver<'a> {
     /// The solver the scenario asks for.
     pub fn new(problem: &'a Problem, system: &'a StepSystem) -> Self {
         let s = &problem.scenario.solver;
+        let paper_params = PaperParams {
+            tolerance: s.tolerance,
+            max_convexification: s.max_convexification,
+            inner_tolerance: s.inner_tolerance,
+            max_inner: s.max_inner,
+        };
+        let paper = PaperSolver::new(problem, system, paper_params);
         match s.kind {
-            SolverKind::Paper => StepSolver::Paper(PaperSolver::new(
+            SolverKind::Paper => StepSolver::Paper(paper),
+            SolverKind::Fast => StepSolver::Fast(FastSolver::new(
                 problem,
                 system,
-                PaperParams {
-                    tolerance: s.tolerance,
-                    max_convexification: s.max_convexification,
-                    inner_tolerance: s.inner_tolerance,
-                    max_inner: s.max_inner,
+                paper,
+                paper_params,
+                NewtonParams {
+                    tolerance: s.inner_tolerance,
+                    max_iterations: 8,
                 },
             )),
         }
@@ -80,6 +92,7 @@ impl<'a> StepSolver<'a> {
     pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
         match self {
             StepSolver::Paper(solver) => solver.step(previous),
+            StepSolver::Fast(solver) => solver.step(previous),
         }
     }
 }

@@ -1,9 +1,13 @@
 //! Time stepping and the nonsmooth solvers of one step.
 //!
 //! [`system::StepSystem`] holds the linear part of Problem 14, factored once per run;
-//! [`paper::PaperSolver`] is the convexification + augmented-Lagrangian solver of Problem 17.
+//! [`paper::PaperSolver`] is the convexification + augmented-Lagrangian solver of Problem 17;
+//! [`fast::FastSolver`] a semismooth Newton method on the same condensed problem.
 
 pub mod condensed;
+pub mod factor;
+pub mod fast;
+pub mod newton;
 pub mod paper;
 pub mod system;
 
@@ -23,6 +27,10 @@ pub struct StepInfo {
     /// Last relative increments of u, θ, ξ, ζ: the left sides of (77)–(80) over the right
     /// sides' norms.
     pub increments: [f64; 4],
+    /// Semismooth Newton iterations (fast solver).
+    pub newton_iterations: usize,
+    /// The fast solver fell back to the paper's solver in this step.
+    pub fallback: bool,
 }
 
 /// Relative increments (77)–(80) between two iterates of one time step.

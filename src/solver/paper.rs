@@ -61,6 +61,11 @@ impl<'a> PaperSolver<'a> {
         }
     }
 
+    /// The condensed compliances on Γ_C.
+    pub fn condensation(&self) -> &Condensation {
+        &self.condensation
+    }
+
     /// One time step: from the state at t_{n−1} to the state at t_n.
     pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
         let problem = self.problem;
