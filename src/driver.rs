@@ -98,6 +98,10 @@ pub struct Summary {
     pub fallback_steps: usize,
     /// Sparse solves in the time loop.
     pub linear_solves: usize,
+    /// Stored entries of the LDLᵀ factor of the step matrix.
+    pub factor_nnz: usize,
+    /// Peak resident memory of the process at the end of the run (Linux), MiB.
+    pub peak_memory_mib: Option<f64>,
     pub timings: Timings,
     pub outputs: Vec<OutputRecord>,
 }
@@ -200,6 +204,8 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
         newton_iterations: newton_total,
         fallback_steps: fallbacks,
         linear_solves: loop_solves,
+        factor_nnz: system.factor_nnz(),
+        peak_memory_mib: crate::bench::peak_memory_mib(),
         timings,
         outputs,
     };
@@ -360,6 +366,8 @@ pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
         newton_iterations: 0,
         fallback_steps: 0,
         linear_solves: 0,
+        factor_nnz: system.factor_nnz(),
+        peak_memory_mib: None,
         timings: Timings::default(),
         outputs,
     };

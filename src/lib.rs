@@ -40,6 +40,7 @@
 //! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
 //! the input, [`norms`] measures.
 
+pub mod bench;
 pub mod contact;
 pub mod driver;
 pub mod error;

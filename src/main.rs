@@ -67,6 +67,24 @@ enum Command {
     /// Print the built-in default scenario (the paper's Section 6 example) as a commented,
     /// complete TOML file.
     Scenario,
+    /// Benchmark: the paper's reference discretization (nx = 256, ny = 64, k = 1/64) with each
+    /// solver, then the fast solver over mesh sizes; prints time per phase, iterations and peak
+    /// memory, the growth exponent, and writes bench.json / bench_*.csv. Each run is a child
+    /// process.
+    Bench {
+        /// Output folder for the runs and the tables.
+        #[arg(long, default_value = "out/bench")]
+        out: PathBuf,
+        /// Mesh sizes nx of the scaling table (ny = nx/4).
+        #[arg(long, value_delimiter = ',', default_value = "64,128,256,512,1024")]
+        sizes: Vec<usize>,
+        /// Time steps (k = 1/steps).
+        #[arg(long, default_value_t = 64)]
+        steps: usize,
+        /// Also run the paper's solver in the scaling table up to this nx.
+        #[arg(long, default_value_t = 128)]
+        paper_up_to: usize,
+    },
 }
 
 fn main() -> ExitCode {
@@ -88,6 +106,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             print!("{DEFAULT_TOML}");
             Ok(())
         }
+        Command::Bench {
+            out,
+            sizes,
+            steps,
+            paper_up_to,
+        } => bench(&out, &sizes, steps, paper_up_to),
         Command::Run { scenario, out, quiet } => {
             let scenario = scenario.load()?;
             print_setup(&scenario);
@@ -104,6 +128,53 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
     }
+}
+
+fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usize) -> anyhow::Result<()> {
+    use thermocontact::bench::{format_table, loglog_slope, measure, write_results};
+    let exe = std::env::current_exe()?;
+    std::fs::create_dir_all(out)?;
+    println!("reference discretization of the paper: nx = 256, ny = 64, k = 1/{steps}");
+    let mut rows = Vec::new();
+    for solver in ["fast", "paper"] {
+        let row = measure(&exe, out, solver, 256, steps)?;
+        println!("{solver:>6}: {:.3} s wall", row.total);
+        rows.push(row);
+    }
+    println!("\n{}", format_table(&rows));
+    let mut scaling = Vec::new();
+    for &nx in sizes {
+        for solver in ["fast", "paper"] {
+            if solver == "paper" && nx > paper_up_to {
+                continue;
+            }
+            let row = measure(&exe, out, solver, nx, steps)?;
+            eprintln!("  {solver} nx = {nx}: {:.3} s", row.total);
+            scaling.push(row);
+        }
+    }
+    println!("scaling (ny = nx/4, {steps} steps):\n{}", format_table(&scaling));
+    let fast: Vec<_> = scaling.iter().filter(|r| r.solver == "fast").collect();
+    let work = |r: &&thermocontact::bench::BenchRow| (r.unknowns * r.steps) as f64;
+    let fit = |f: &dyn Fn(&thermocontact::bench::BenchRow) -> f64| {
+        loglog_slope(&fast.iter().map(|r| (work(r), f(r))).collect::<Vec<_>>())
+    };
+    if let (Some(total), Some(stepping), Some(memory)) = (
+        fit(&|r| r.total),
+        fit(&|r| r.time_stepping),
+        fit(&|r| r.peak_memory_mib.unwrap_or(0.0)),
+    ) {
+        println!(
+            "growth exponents in unknowns × steps (fast solver, least squares): total {total:.2}, time loop {stepping:.2}, peak memory {memory:.2}"
+        );
+    }
+    rows.extend(scaling);
+    write_results(out, &rows)?;
+    println!(
+        "tables written to {}/ (bench.json, bench_fast.csv, bench_paper.csv)",
+        out.display()
+    );
+    Ok(())
 }
 
 fn print_setup(s: &Scenario) {
