@@ -13,6 +13,8 @@
 //! matrices computed once per run with blocks of right-hand sides; the nonsmooth iterations then
 //! cost dense products on Γ_C only, and the full fields need one solve per outer iterate.
 
+use rayon::prelude::*;
+
 use super::system::StepSystem;
 use crate::problem::Problem;
 
@@ -54,7 +56,11 @@ impl Condensation {
             for (j, column) in block.chunks_exact_mut(n).enumerate() {
                 column[tangent_dof(start + j)] = 1.0;
             }
-            system.solve_symmetric_block_in_place(&mut block, width);
+            // Two halves of the block on the two cores (each solve is sequential inside faer).
+            let half = width.div_ceil(rayon::current_num_threads().max(1)).max(1);
+            block
+                .par_chunks_mut(n * half)
+                .for_each(|part| system.solve_symmetric_block_in_place(part, part.len() / n));
             for (j, column) in block.chunks_exact(n).enumerate() {
                 let col = start + j;
                 for row in 0..n_t {

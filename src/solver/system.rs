@@ -11,7 +11,7 @@
 //! with right-hand sides. It is not symmetric (±G); its sign-flipped form S = J A is symmetric
 //! quasi-definite and is what gets factored ([`super::factor`]).
 
-use std::cell::Cell;
+use std::sync::Mutex;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -73,7 +73,7 @@ pub struct StepSystem {
     /// equations negated).
     pub matrix: CscMatrix,
     /// Work counters: solves (right-hand sides) and seconds spent in them and in `rhs`.
-    stats: Cell<SystemStats>,
+    stats: Mutex<SystemStats>,
     factor: QuasiDefiniteLdlt,
     /// Contributions of θ_D to the right-hand side (moved over from the matrix).
     lift: Vec<f64>,
@@ -133,7 +133,7 @@ impl StepSystem {
             lift,
             n_w,
             k,
-            stats: Cell::new(SystemStats::default()),
+            stats: Mutex::new(SystemStats::default()),
         })
     }
 
@@ -167,13 +167,11 @@ impl StepSystem {
 
     /// The work counters so far.
     pub fn stats(&self) -> SystemStats {
-        self.stats.get()
+        *self.stats.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     fn count(&self, update: impl FnOnce(&mut SystemStats)) {
-        let mut stats = self.stats.get();
-        update(&mut stats);
-        self.stats.set(stats);
+        update(&mut self.stats.lock().unwrap_or_else(|e| e.into_inner()));
     }
 
     /// Number of velocity unknowns (the first block of x).
