@@ -94,7 +94,7 @@ pub struct Summary {
     pub max_convexification_per_step: usize,
     /// Semismooth Newton iterations (fast solver).
     pub newton_iterations: usize,
-    /// Steps in which the fast solver fell back to the paper's solver.
+    /// Steps the fast solver took through the convexification loop (law too steep for Newton).
     pub fallback_steps: usize,
     /// Sparse solves in the time loop.
     pub linear_solves: usize,

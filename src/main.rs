@@ -212,7 +212,7 @@ fn print_summary(s: &Summary) {
     );
     println!("{:<34} {:>12}", "inner (augmented-Lagrangian) its", s.inner_iterations);
     println!("{:<34} {:>12}", "semismooth Newton iterations", s.newton_iterations);
-    println!("{:<34} {:>12}", "steps falling back to \"paper\"", s.fallback_steps);
+    println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
     println!();
     println!("{:<34} {:>10.3} s", "assembly", t.assembly);
     println!("{:<34} {:>10.3} s", "factorization", t.factorization);

@@ -127,3 +127,35 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     assert_eq!(end.slip_nodes + end.stick_nodes, problem.contact.len());
     assert_eq!(last.u, state.u, "the driver runs the same steps");
 }
+
+/// A solver that hits its iteration cap says where (step, time) and by how much.
+#[test]
+fn non_convergence_is_reported_with_step_and_increments() {
+    for kind in ["paper", "fast"] {
+        let scenario = coarse(&[
+            &format!("solver.kind={kind}"),
+            "solver.max_convexification=1",
+            "solver.tolerance=1e-14",
+        ]);
+        let problem = Problem::new(&scenario).unwrap();
+        let system = StepSystem::new(&problem).unwrap();
+        let solver = StepSolver::new(&problem, &system);
+        let mut state = State::initial(&problem);
+        let error = loop {
+            match solver.step(&state) {
+                Ok((next, _)) => state = next,
+                Err(e) => break e,
+            }
+            assert!(
+                state.n < scenario.time.steps,
+                "{kind}: a single convexification iterate cannot meet 1e-14 all the way"
+            );
+        };
+        let message = error.to_string();
+        assert!(message.contains("did not converge at time step"), "{message}");
+        assert!(message.contains("convexification"), "{message}");
+        if kind == "paper" {
+            assert!(message.contains("(77)") && message.contains("(80)"), "{message}");
+        }
+    }
+}

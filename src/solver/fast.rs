@@ -1,5 +1,6 @@
 //! The fast step solver: condensation onto Γ_C + semismooth Newton on the nonmonotone law
-//! ([`super::newton`]), with the paper's convexification solver as a safeguard.
+//! ([`super::newton`]), with the convexification loop of Problem 17 (Newton inner solves) as
+//! the safeguard where the law is too steep.
 //!
 //! Per step: one solve for the free fields, a few dense Newton iterations on Γ_C, one solve
 //! for the full fields — against one solve per convexification iterate for the paper's solver.
@@ -93,15 +94,17 @@ impl<'a> FastSolver<'a> {
                 // Newton on the nonmonotone law cycles where the law is steep: convexify as the
                 // paper does, solving each convex problem by Newton.
                 info.fallback = true;
-                info.newton_iterations = self.params.max_iterations;
+                if self.steepness < 1.0 {
+                    info.newton_iterations = self.params.max_iterations;
+                }
                 self.convexified(&step, &w_free, guess_w, guess_xi, &mut info)
-                    .ok_or_else(|| Error::NotConverged {
+                    .map_err(|residuals| Error::NotConverged {
                         solver: "fast",
                         loop_name: "convexification",
                         step: n,
                         time: t,
-                        iterations: self.paper_params.max_convexification,
-                        residuals: "(semismooth Newton on the convex subproblem or the fixed point stalled)".into(),
+                        iterations: info.convexification_iterations,
+                        residuals,
                         tolerance: self.paper_params.tolerance,
                     })?
             }
@@ -131,14 +134,22 @@ impl<'a> FastSolver<'a> {
         mut w: Vec<f64>,
         mut xi: Vec<f64>,
         info: &mut StepInfo,
-    ) -> Option<NewtonResult> {
+    ) -> Result<NewtonResult, String> {
         let t = step.tangential;
         let n_nodes = self.problem.contact.len();
+        let mut last = String::new();
         for m in 1..=self.paper_params.max_convexification {
             let bounds: Vec<f64> = (0..n_nodes)
                 .map(|i| self.problem.friction.bound(norm(&w[i * t..(i + 1) * t])))
                 .collect();
-            let inner = step.solve(w_free, w.clone(), xi.clone(), Some(&bounds), self.params)?;
+            let inner = step
+                .solve(w_free, w.clone(), xi.clone(), Some(&bounds), self.params)
+                .ok_or_else(|| {
+                    format!(
+                        "semismooth Newton on convex subproblem {m} stalled after {} iterations",
+                        self.params.max_iterations
+                    )
+                })?;
             info.newton_iterations += inner.iterations;
             info.convexification_iterations = m;
             let dw = max_diff(&inner.w, &w);
@@ -147,15 +158,20 @@ impl<'a> FastSolver<'a> {
             let g_scale = bounds.iter().fold(0.0f64, |s, v| s.max(*v));
             w = inner.w;
             xi = inner.xi;
+            last = format!(
+                "max |Δw_τ| / max |w_τ| = {:.3e}, max |Δξ| / max bound = {:.3e}",
+                dw / w_scale.max(f64::MIN_POSITIVE),
+                dxi / g_scale.max(f64::MIN_POSITIVE)
+            );
             if dw <= self.paper_params.tolerance * w_scale && dxi <= self.paper_params.tolerance * g_scale {
-                return Some(NewtonResult {
+                return Ok(NewtonResult {
                     w,
                     xi,
                     iterations: info.newton_iterations,
                 });
             }
         }
-        None
+        Err(last)
     }
 }
 

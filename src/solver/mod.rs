@@ -29,7 +29,7 @@ pub struct StepInfo {
     pub increments: [f64; 4],
     /// Semismooth Newton iterations (fast solver).
     pub newton_iterations: usize,
-    /// The fast solver fell back to the paper's solver in this step.
+    /// The fast solver went through the convexification loop in this step.
     pub fallback: bool,
 }
 

@@ -17,8 +17,9 @@
 //! nodes and w at slip nodes: one dense n_t × n_t LU per iteration, n_t = (d − 1)·#Γ_C nodes.
 //!
 //! Where the law falls steeply (m_τ large against ρ/k and the viscosity, conditions (16)–(18))
-//! the step problem may have several solutions and Newton may stall; the step then falls back
-//! to the paper's convexification solver, and the fallback is counted.
+//! the step problem may have several solutions and Newton may cycle; the step then goes through
+//! the convexification loop of Problem 17, each convex problem solved by this Newton method with
+//! frozen bounds ([`super::fast`]), and the step is counted.
 
 use std::cell::RefCell;
 
@@ -33,7 +34,7 @@ use crate::contact::FrictionLaw;
 pub struct NewtonParams {
     /// Relative tolerance on the Newton update (w against max |w|, ξ against max bound).
     pub tolerance: f64,
-    /// Iteration cap; past it the step falls back to the paper's solver.
+    /// Iteration cap; past it the step goes through the convexification loop.
     pub max_iterations: usize,
 }
 
