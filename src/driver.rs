@@ -16,7 +16,7 @@ use crate::output::{self, fields, Field, Grid, PvdEntry};
 use crate::problem::Problem;
 use crate::scenario::Scenario;
 use crate::solver::system::{State, StepSystem};
-use crate::time::{self, contact_rows, ContactRow, StepSolver};
+use crate::time::{contact_rows, ContactRow, StepSolver};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -108,6 +108,17 @@ pub struct Summary {
 
 /// Runs a scenario end to end.
 pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> {
+    run_with_state(scenario, options).map(|(summary, _)| summary)
+}
+
+/// Runs without writing files or drawing progress (tests and studies); also returns the state
+/// at T.
+pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
+    run_with_state(scenario, &RunOptions::default())
+}
+
+/// [`run`], also returning the state at T.
+pub fn run_with_state(scenario: &Scenario, options: &RunOptions) -> Result<(Summary, State), Error> {
     let start = Instant::now();
     let mut timings = Timings::default();
     let problem = Problem::new(scenario)?;
@@ -225,7 +236,7 @@ pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> 
         summary.timings.output = output_time;
         summary.timings.total = start.elapsed().as_secs_f64();
     }
-    Ok(summary)
+    Ok((summary, state))
 }
 
 /// The figures of one output time.
@@ -334,42 +345,4 @@ fn write_snapshot(
         pvd.push(PvdEntry { time: record.t, file });
     }
     Ok(())
-}
-
-/// Runs without writing files (tests and studies).
-pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
-    let problem = Problem::new(scenario)?;
-    let system = StepSystem::new(&problem)?;
-    let output_steps = scenario.output_steps();
-    let mut outputs = Vec::new();
-    let last = time::run(&problem, &system, |state, _| {
-        if output_steps.contains(&state.n) {
-            outputs.push(record(&problem, state, scenario.solver.slip_tolerance));
-        }
-        Ok(())
-    })?;
-    let summary = Summary {
-        dim: problem.dim(),
-        nodes: problem.mesh.n_nodes(),
-        elements: problem.mesh.n_cells(),
-        velocity_unknowns: problem.velocity.n_free,
-        temperature_unknowns: problem.temperature.n_free,
-        unknowns: problem.n_unknowns(),
-        contact_nodes: problem.contact.len(),
-        steps: scenario.time.steps,
-        time_step: problem.time_step(),
-        solver: format!("{:?}", scenario.solver.kind).to_lowercase(),
-        slip_tolerance: scenario.solver.slip_tolerance,
-        convexification_iterations: 0,
-        inner_iterations: 0,
-        max_convexification_per_step: 0,
-        newton_iterations: 0,
-        fallback_steps: 0,
-        linear_solves: 0,
-        factor_nnz: system.factor_nnz(),
-        peak_memory_mib: None,
-        timings: Timings::default(),
-        outputs,
-    };
-    Ok((summary, last))
 }
