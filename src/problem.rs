@@ -18,7 +18,9 @@ pub struct ContactNode {
     pub node: usize,
     /// ℓ_i = ∫_ΓC φ_i, the nodal quadrature weight.
     pub weight: f64,
-    /// Velocity unknowns of the tangential components (first d − 1 used).
+    /// Velocity unknowns of the tangential components (first d − 1 used); `usize::MAX` marks a
+    /// coordinate held at zero by a symmetry plane through the node (see
+    /// [`VelocitySpace::with_planes`]).
     pub tangent_dofs: [usize; 2],
     /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
     pub theta_dof: Option<usize>,
@@ -67,11 +69,15 @@ impl Problem {
                 scenario.mesh.ny,
             ),
             _ => {
-                return Err(Error::InvalidValue {
-                    key: "geometry.lengths".into(),
-                    value: format!("{:?}", scenario.geometry.lengths),
-                    expected: "2 lengths: this version meshes rectangles only".into(),
-                })
+                let l = &scenario.geometry.lengths;
+                let Some(nz) = scenario.mesh.nz else {
+                    return Err(Error::InvalidValue {
+                        key: "mesh.nz".into(),
+                        value: "(missing)".into(),
+                        expected: "a cell count for the box's z direction".into(),
+                    });
+                };
+                mesh::cuboid([l[0], l[1], l[2]], [scenario.mesh.nx, scenario.mesh.ny, nz])
             }
         };
         let parts = |names: &[String]| -> Vec<usize> { names.iter().filter_map(|n| mesh.part_index(n)).collect() };
@@ -95,7 +101,17 @@ impl Problem {
         let on_contact = mesh.nodes_on(&contact_parts);
         let contact_marks: Vec<bool> = on_contact.iter().zip(&clamped).map(|(&c, &cl)| c && !cl).collect();
         let tangents = tangent_basis(&scenario.boundary.contact_normal);
-        let (velocity, tangent_dofs) = VelocitySpace::new(d, &clamped, &contact_marks, &tangents);
+        let planes = symmetry_planes(&mesh, scenario)?;
+        let (velocity, tangent_dofs) = VelocitySpace::with_planes(d, &clamped, &contact_marks, &tangents, &planes)
+            .map_err(|e| Error::InvalidValue {
+                key: "boundary.symmetry".into(),
+                value: format!("{:?}", scenario.boundary.symmetry),
+                expected: format!(
+                    "symmetry planes whose normal is, where they meet Γ_C (node at {:?}), along ν or along a \
+                     tangent of Γ_C (t = {:?}); ν_s = {:?} is along neither",
+                    mesh.coords[e.node], tangents, e.normal
+                ),
+            })?;
         let theta_fixed = mesh.nodes_on(&[dirichlet.clone(), neumann.clone()].concat());
         let temperature = TemperatureSpace::new(&theta_fixed);
 
@@ -215,6 +231,27 @@ impl Problem {
     pub fn contact_measure(&self) -> f64 {
         self.contact_weights.iter().sum()
     }
+}
+
+/// Per node, the unit normals of the scenario's symmetry planes through it.
+fn symmetry_planes(mesh: &Mesh, scenario: &Scenario) -> Result<Vec<Vec<[f64; 3]>>, Error> {
+    let mut planes = vec![Vec::new(); mesh.n_nodes()];
+    for name in &scenario.boundary.symmetry {
+        let normal = mesh
+            .part_index(name)
+            .and_then(|part| Some((part, mesh.part_normal(part)?)))
+            .ok_or_else(|| Error::InvalidValue {
+                key: "boundary.symmetry".into(),
+                value: name.clone(),
+                expected: "a flat boundary part of the mesh".into(),
+            })?;
+        for (p, on) in mesh.nodes_on(&[normal.0]).into_iter().enumerate() {
+            if on {
+                planes[p].push(normal.1);
+            }
+        }
+    }
+    Ok(planes)
 }
 
 fn add(target: &mut [f64], other: &[f64]) {

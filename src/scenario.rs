@@ -63,6 +63,10 @@ pub struct BoundarySpec {
     pub contact_normal: Vec<f64>,
     /// θ_D on Γ_D ∪ Γ_N.
     pub temperature: f64,
+    /// Symmetry (roller) planes: w·ν = 0, no shear traction, no heat flux (optional; none in
+    /// the default).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub symmetry: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -252,6 +256,7 @@ impl Scenario {
             ("boundary.dirichlet", &self.boundary.dirichlet),
             ("boundary.neumann", &self.boundary.neumann),
             ("boundary.contact", &self.boundary.contact),
+            ("boundary.symmetry", &self.boundary.symmetry),
         ] {
             for name in list {
                 if !parts.contains(&name.as_str()) {
@@ -261,7 +266,7 @@ impl Scenario {
                     return Err(invalid(
                         key,
                         name,
-                        "each boundary part in at most one of dirichlet, neumann, contact",
+                        "each boundary part in at most one of dirichlet, neumann, contact, symmetry",
                     ));
                 }
                 seen.push(name);
@@ -468,6 +473,10 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
     }
 }
 
+/// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
+/// and checked when the scenario is read.
+const OPTIONAL_KEYS: &[&str] = &["mesh.nz", "boundary.symmetry"];
+
 /// Lays `user` over `base`, key by key. A key unknown to the base is an error naming its path. A
 /// table whose `law` changes is replaced whole, since its keys depend on the law.
 fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
@@ -477,6 +486,10 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
         } else {
             format!("{prefix}.{key}")
         };
+        if !base.contains_key(&key) && OPTIONAL_KEYS.contains(&path.as_str()) {
+            base.insert(key, value);
+            continue;
+        }
         let Some(slot) = base.get_mut(&key) else {
             let known: Vec<&String> = base.keys().collect();
             return Err(Error::UnknownKey {

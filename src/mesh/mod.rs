@@ -2,10 +2,16 @@
 //!
 //! A [`Mesh`] is a conforming triangulation (d = 2) or tetrahedralization (d = 3) of Ω̄. Its
 //! boundary facets (edges in 2D, triangles in 3D) carry the index of a named part (`left`,
-//! `bottom`, …); a scenario maps parts to Γ_D, Γ_N and Γ_C.
+//! `bottom`, …); a scenario maps parts to Γ_D, Γ_N and Γ_C (and to symmetry planes).
+//!
+//! Generators: [`rectangle`] (triangles, parts `left`, `right`, `bottom`, `top`) and [`cuboid`]
+//! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
+//! `z+`).
 
+mod cuboid;
 mod structured;
 
+pub use cuboid::{cuboid, cuboid_part_names};
 pub use structured::{rectangle, rectangle_part_names};
 
 /// A P1 simplicial mesh in d = 2 or 3 dimensions.
@@ -82,6 +88,38 @@ impl Mesh {
     /// Coordinates of the vertices of cell `e`.
     pub fn cell_coords(&self, e: usize) -> Vec<[f64; 3]> {
         self.cell(e).iter().map(|&i| self.coords[i]).collect()
+    }
+
+    /// The unit normal line of a flat boundary part (the sign is arbitrary): `None` if the part
+    /// has no facets or its facets are not all parallel.
+    pub fn part_normal(&self, part: usize) -> Option<[f64; 3]> {
+        let mut normal: Option<[f64; 3]> = None;
+        for f in self.facets_of(&[part]) {
+            let x: Vec<[f64; 3]> = self.facet(f).iter().map(|&i| self.coords[i]).collect();
+            let e = [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]];
+            let n = if self.dim == 2 {
+                [-e[1], e[0], 0.0]
+            } else {
+                let g = [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]];
+                [
+                    e[1] * g[2] - e[2] * g[1],
+                    e[2] * g[0] - e[0] * g[2],
+                    e[0] * g[1] - e[1] * g[0],
+                ]
+            };
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            let n = n.map(|c| c / len);
+            match normal {
+                None => normal = Some(n),
+                Some(m) => {
+                    // Parallel: |n · m| = 1 up to round-off.
+                    if (n[0] * m[0] + n[1] * m[1] + n[2] * m[2]).abs() < 1.0 - 1e-9 {
+                        return None;
+                    }
+                }
+            }
+        }
+        normal
     }
 
     /// Measure |Ω| (sum of cell measures).

@@ -233,7 +233,10 @@ pub fn add_contact_terms(problem: &Problem, n_w: usize, xi: &[[f64; 2]], heat: &
     let tangential = problem.dim() - 1;
     for (i, node) in problem.contact.iter().enumerate() {
         for k in 0..tangential {
-            rhs[node.tangent_dofs[k]] += node.weight * xi[i][k];
+            // usize::MAX: a coordinate held at zero by a symmetry plane, no unknown to load.
+            if let Some(r) = rhs.get_mut(node.tangent_dofs[k]) {
+                *r += node.weight * xi[i][k];
+            }
         }
         if let Some(r) = node.theta_dof {
             rhs[n_w + r] += node.weight * heat[i];
@@ -250,7 +253,8 @@ pub fn tangential_velocities(problem: &Problem, x: &[f64]) -> Vec<[f64; 2]> {
         .map(|node| {
             let mut w = [0.0; 2];
             for k in 0..tangential {
-                w[k] = x[node.tangent_dofs[k]];
+                // usize::MAX: a coordinate held at zero by a symmetry plane.
+                w[k] = x.get(node.tangent_dofs[k]).copied().unwrap_or(0.0);
             }
             w
         })
