@@ -5,11 +5,11 @@ use thermocontact::driver::run_quiet;
 use thermocontact::norms;
 use thermocontact::{Problem, Scenario};
 
-fn compare(overrides: &[&str]) {
+fn compare(file: Option<&str>, overrides: &[&str]) {
     let load = |kind: &str| {
         let mut all: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
         all.push(format!("solver.kind={kind}"));
-        Scenario::load(None, &all).unwrap()
+        Scenario::load(file, &all).unwrap()
     };
     let (paper_summary, paper) = run_quiet(&load("paper")).unwrap();
     let (fast_summary, fast) = run_quiet(&load("fast")).unwrap();
@@ -47,15 +47,40 @@ fn compare(overrides: &[&str]) {
 
 #[test]
 fn fast_solver_matches_the_paper_solver_on_the_default_scenario() {
-    compare(&[]);
+    compare(None, &[]);
 }
 
 #[test]
 fn fast_solver_matches_the_paper_solver_with_strong_thermal_expansion() {
-    compare(&[
-        "mesh.nx=32",
-        "mesh.ny=8",
-        "material.thermal_expansion=1e-3",
-        "boundary.temperature=25.0",
-    ]);
+    compare(
+        None,
+        &[
+            "mesh.nx=32",
+            "mesh.ny=8",
+            "material.thermal_expansion=1e-3",
+            "boundary.temperature=25.0",
+        ],
+    );
+}
+
+#[test]
+fn fast_solver_matches_the_paper_solver_in_3d() {
+    let paper3d = include_str!("../scenarios/paper3d.toml");
+    compare(
+        Some(paper3d),
+        &["mesh.nx=12", "mesh.ny=3", "mesh.nz=3", "time.steps=16"],
+    );
+    // With symmetry planes a tangential coordinate is held at zero at some contact nodes.
+    compare(
+        Some(paper3d),
+        &[
+            "mesh.nx=12",
+            "mesh.ny=2",
+            "mesh.nz=3",
+            "time.steps=8",
+            "geometry.lengths=[40.0, 5.0, 10.0]",
+            "boundary.neumann=[\"x+\", \"z+\"]",
+            "boundary.symmetry=[\"y-\", \"y+\"]",
+        ],
+    );
 }

@@ -46,7 +46,11 @@ impl Condensation {
         let chunk = ((256usize << 20) / (8 * n.max(1))).clamp(1, 256);
         let mut friction = vec![0.0; n_t * n_t];
         let mut heat = vec![0.0; n_t * n_contact];
-        let tangent_dof = |col: usize| problem.contact[col / tangential].tangent_dofs[col % tangential];
+        // `None` where a symmetry plane holds the tangential coordinate at zero (no unknown).
+        let tangent_dof = |col: usize| {
+            let dof = problem.contact[col / tangential].tangent_dofs[col % tangential];
+            (dof < n_w).then_some(dof)
+        };
         let mut block = Vec::new();
         let mut start = 0;
         while start < n_t {
@@ -54,7 +58,9 @@ impl Condensation {
             block.clear();
             block.resize(n * width, 0.0);
             for (j, column) in block.chunks_exact_mut(n).enumerate() {
-                column[tangent_dof(start + j)] = 1.0;
+                if let Some(dof) = tangent_dof(start + j) {
+                    column[dof] = 1.0;
+                }
             }
             // Two halves of the block on the two cores (each solve is sequential inside faer).
             let half = width.div_ceil(rayon::current_num_threads().max(1)).max(1);
@@ -63,9 +69,9 @@ impl Condensation {
                 .for_each(|part| system.solve_symmetric_block_in_place(part, part.len() / n));
             for (j, column) in block.chunks_exact(n).enumerate() {
                 let col = start + j;
+                let weight = problem.contact[col / tangential].weight;
                 for row in 0..n_t {
-                    let weight = problem.contact[col / tangential].weight;
-                    friction[row * n_t + col] = column[tangent_dof(row)] * weight;
+                    friction[row * n_t + col] = tangent_dof(row).map_or(0.0, |dof| column[dof] * weight);
                 }
                 // (E_θ X)[i][col] is the entry H[col][i] up to −ℓ_i.
                 for (i, node) in problem.contact.iter().enumerate() {
@@ -75,6 +81,17 @@ impl Condensation {
                 }
             }
             start += width;
+        }
+        // A coordinate held at zero by a symmetry plane gets an artificial compliance of the
+        // mean size, w_c = c̄ ξ_c: every solution of the friction law then has w_c = ξ_c = 0 (the
+        // plane carries the reaction), and the Newton matrices stay regular.
+        let constrained: Vec<usize> = (0..n_t).filter(|&c| tangent_dof(c).is_none()).collect();
+        if !constrained.is_empty() {
+            let free: Vec<usize> = (0..n_t).filter(|&c| tangent_dof(c).is_some()).collect();
+            let mean = free.iter().map(|&c| friction[c * n_t + c]).sum::<f64>() / free.len().max(1) as f64;
+            for c in constrained {
+                friction[c * n_t + c] = if mean > 0.0 { mean } else { 1.0 };
+            }
         }
         Condensation {
             n_t,
