@@ -73,6 +73,8 @@ enum Command {
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
     /// solution with exact stick and slip (errors against the exact solution), in the norms of
     /// (73). Prints a table with observed orders; writes CSV, JSON and log-log plots (PNG, SVG).
+    /// A scenario file or --set changes the self-convergence study's problem; each level
+    /// replaces its mesh (n_x = 4/h, n_y = n_x L₂/L₁) and time step (k = T h).
     Converge {
         #[command(flatten)]
         scenario: ScenarioArgs,
@@ -162,7 +164,14 @@ fn converge(scenario: ScenarioArgs, n_levels: usize, study: Study, out: PathBuf)
     };
     let mut reports = Vec::new();
     if study != Study::Manufactured {
-        print_setup(&base);
+        println!(
+            "thermocontact converge: Ω = {:?} m, T = {} s, solver {:?}, θ_D = {} °C, α_exp = {:e}; each level replaces the scenario's mesh and time step",
+            base.geometry.lengths,
+            base.time.final_time,
+            base.solver.kind,
+            base.boundary.temperature,
+            base.material.thermal_expansion,
+        );
         eprintln!("self-convergence study, {n_levels} levels:");
         reports.push(verification::study::self_convergence(&base, n_levels, &mut progress)?);
     }

@@ -99,6 +99,10 @@ where
         .chain(&reference)
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
     let (e_min, e_max) = if e_max > 0.0 { (e_min, e_max) } else { (1e-3, 1.0) };
+    // Ticks at the levels' h (1/2, 1/4, …), not at the decades' 1, 2, 3, … multiples.
+    let mut ticks: Vec<f64> = all.iter().map(|p| p.0).collect();
+    ticks.sort_by(f64::total_cmp);
+    ticks.dedup();
 
     let mut chart = ChartBuilder::on(&root)
         .caption(title, (FONT, 22))
@@ -106,8 +110,9 @@ where
         .x_label_area_size(50)
         .y_label_area_size(80)
         .build_cartesian_2d(
-            (h_min / 1.4..h_max * 1.4).log_scale(),
-            (e_min / 2.0..e_max * 2.0).log_scale(),
+            (h_min / 1.4..h_max * 1.4).log_scale().with_key_points(ticks),
+            // Headroom above the curves for the legend (upper left: errors grow with h).
+            (e_min / 2.0..e_max * 40.0).log_scale(),
         )?;
     chart
         .configure_mesh()
@@ -116,6 +121,7 @@ where
         .label_style((FONT, 15))
         .axis_desc_style((FONT, 17))
         .x_label_formatter(&|h| format!("1/{:.0}", 1.0 / h))
+        .x_max_light_lines(0)
         .y_label_formatter(&|e| format!("{e:.0e}"))
         .draw()?;
 
@@ -150,7 +156,7 @@ where
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
+        .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font((FONT, 15))
