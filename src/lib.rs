@@ -38,7 +38,7 @@
 //! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
 //! [`contact`] (laws) → [`problem`] (a scenario made discrete) → [`solver`] (step system and
 //! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
-//! the input, [`norms`] measures.
+//! the input, [`norms`] measures, [`verification`] runs the convergence studies.
 
 pub mod bench;
 pub mod contact;
@@ -53,6 +53,7 @@ pub mod problem;
 pub mod scenario;
 pub mod solver;
 pub mod time;
+pub mod verification;
 
 pub use error::Error;
 pub use problem::Problem;

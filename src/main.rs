@@ -5,6 +5,7 @@
 //! thermocontact run my.toml --out results   # a scenario file laid over the default
 //! thermocontact run --set mesh.nx=256 --set mesh.ny=64 --set time.steps=64
 //! thermocontact scenario > my.toml          # the default scenario, commented
+//! thermocontact converge                    # Fig. 4 and the manufactured solution, h = 1/2 … 1/64
 //! ```
 
 use std::path::PathBuf;
@@ -14,6 +15,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use thermocontact::driver::{self, RunOptions, Summary};
 use thermocontact::scenario::{Scenario, DEFAULT_TOML};
+use thermocontact::verification::{self, study::LevelRun};
 
 /// Dynamic frictional contact of thermo-viscoelastic bodies with nonmonotone (slip-weakening)
 /// friction: the P1 / backward-Euler scheme of Bartosz, Danan & Szafraniec, Comput. Math. Appl.
@@ -85,6 +87,35 @@ enum Command {
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
     },
+    /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
+    /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
+    /// solution with exact stick and slip (errors against the exact solution), in the norms of
+    /// (73). Prints a table with observed orders; writes CSV, JSON and log-log plots (PNG, SVG).
+    /// A scenario file or --set changes the self-convergence study's problem; each level
+    /// replaces its mesh (n_x = 4/h, n_y = n_x L₂/L₁) and time step (k = T h).
+    Converge {
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+        /// N, the number of levels: h = k = 1/2 … 1/2^N (the default 6 is the paper's study up
+        /// to h = 1/64, about a minute in release builds).
+        #[arg(long, default_value_t = 6)]
+        levels: usize,
+        /// Which study: `paper` (self-convergence of the scenario, Fig. 4), `manufactured`
+        /// (the exact-solution family; takes no scenario file or --set), or `both`.
+        #[arg(long, value_enum, default_value_t = Study::Both)]
+        study: Study,
+        /// Output folder (created if missing).
+        #[arg(long, default_value = "out/converge")]
+        out: PathBuf,
+    },
+}
+
+/// The studies of `converge`.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Study {
+    Paper,
+    Manufactured,
+    Both,
 }
 
 fn main() -> ExitCode {
@@ -112,6 +143,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             steps,
             paper_up_to,
         } => bench(&out, &sizes, steps, paper_up_to),
+        Command::Converge {
+            scenario,
+            levels,
+            study,
+            out,
+        } => converge(scenario, levels, study, out),
         Command::Run { scenario, out, quiet } => {
             let scenario = scenario.load()?;
             print_setup(&scenario);
@@ -174,6 +211,76 @@ fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usiz
         "tables written to {}/ (bench.json, bench_fast.csv, bench_paper.csv)",
         out.display()
     );
+    Ok(())
+}
+
+/// `converge`: run the studies, print their tables, write CSV, JSON and plots.
+fn converge(scenario: ScenarioArgs, n_levels: usize, study: Study, out: PathBuf) -> anyhow::Result<()> {
+    let given = scenario.scenario.is_some() || !scenario.overrides.is_empty();
+    if study == Study::Manufactured && given {
+        anyhow::bail!("a scenario file or --set applies to the paper's self-convergence study only (--study paper or both); the manufactured family has its own data");
+    }
+    // Check everything before the first (long) run.
+    let base = scenario.load()?;
+    verification::study::levels(&base, n_levels)?;
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let mut progress = |run: &LevelRun| {
+        eprintln!(
+            "  h = k = 1/{:<4} {:>5} × {:<4} cells, {:>4} steps: {:>8.2} s, {} convexification iterations",
+            1usize << run.level,
+            run.nx,
+            run.ny,
+            run.steps,
+            run.wall_time,
+            run.convexification_iterations
+        );
+    };
+    let mut reports = Vec::new();
+    if study != Study::Manufactured {
+        println!(
+            "thermocontact converge: Ω = {:?} m, T = {} s, solver {:?}, θ_D = {} °C, α_exp = {:e}; each level replaces the scenario's mesh and time step",
+            base.geometry.lengths,
+            base.time.final_time,
+            base.solver.kind,
+            base.boundary.temperature,
+            base.material.thermal_expansion,
+        );
+        eprintln!("self-convergence study, {n_levels} levels:");
+        reports.push(verification::study::self_convergence(&base, n_levels, &mut progress)?);
+    }
+    if study != Study::Paper {
+        eprintln!("manufactured solution, {n_levels} levels:");
+        reports.push(verification::study::manufactured(n_levels, &mut progress)?);
+    }
+    let mut files = Vec::new();
+    for report in &reports {
+        println!();
+        print!("{}", report.table());
+        files.extend(report.write(&out)?);
+    }
+    let json: serde_json::Map<String, serde_json::Value> = reports
+        .iter()
+        .map(|r| {
+            (
+                r.file_stem().to_string(),
+                serde_json::to_value(r).expect("a report serializes"),
+            )
+        })
+        .collect();
+    let path = out.join("convergence.json");
+    thermocontact::output::write_atomic(&path, &serde_json::to_vec_pretty(&json)?)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    files.push(path);
+    println!();
+    let names: Vec<String> = files
+        .iter()
+        .map(|f| {
+            f.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .collect();
+    println!("results written to {}/ ({})", out.display(), names.join(", "));
     Ok(())
 }
 

@@ -54,6 +54,20 @@ pub struct Problem {
     heat_rate: Vec<f64>,
     /// θ_D at Dirichlet nodes, zero elsewhere (full temperature vector).
     pub theta_dirichlet: Vec<f64>,
+    /// Space–time dependent loads beyond the scenario's affine ones (the verification family
+    /// of [`crate::verification::manufactured`]); `None` for scenario runs.
+    pub extra_loads: Option<Box<dyn ExtraLoads>>,
+}
+
+/// Loads that vary in space and time, added to the scenario's affine loads: a body force f₀(x, t),
+/// tractions f₂(x, t) on Γ_N, a known load on Γ_C, a heat source g(x, t) and a known heat flux on
+/// Γ_C. Implementors integrate them into full load vectors (velocity dofs p·d + c, temperature
+/// dofs p); [`Problem::force`] and [`Problem::heat_load`] add them, so every solver sees them.
+pub trait ExtraLoads: Send + Sync + std::fmt::Debug {
+    /// Adds ∫ f₀(t)·φ + ∫_ΓN f₂(t)·φ + ∫_ΓC f_C(t)·φ to a full velocity load vector.
+    fn add_force(&self, problem: &Problem, t: f64, force: &mut [f64]);
+    /// Adds ∫ g(t) η + ∫_ΓC g_C(t) η to a full temperature load vector.
+    fn add_heat(&self, problem: &Problem, t: f64, heat: &mut [f64]);
 }
 
 impl Problem {
@@ -186,7 +200,15 @@ impl Problem {
             heat_constant,
             heat_rate,
             theta_dirichlet,
+            extra_loads: None,
         })
+    }
+
+    /// [`Problem::new`] with space–time dependent loads added to the scenario's.
+    pub fn with_extra_loads(scenario: &Scenario, loads: Box<dyn ExtraLoads>) -> Result<Self, Error> {
+        let mut problem = Problem::new(scenario)?;
+        problem.extra_loads = Some(loads);
+        Ok(problem)
     }
 
     /// Space dimension d.
@@ -211,20 +233,30 @@ impl Problem {
 
     /// F(t): ⟨f(t), φ⟩ = ∫ f₀ · φ + ∫_ΓN f₂ · φ on full velocity dofs.
     pub fn force(&self, t: f64) -> Vec<f64> {
-        self.force_constant
+        let mut force: Vec<f64> = self
+            .force_constant
             .iter()
             .zip(&self.force_rate)
             .map(|(c, r)| c + t * r)
-            .collect()
+            .collect();
+        if let Some(extra) = &self.extra_loads {
+            extra.add_force(self, t, &mut force);
+        }
+        force
     }
 
     /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs.
     pub fn heat_load(&self, t: f64) -> Vec<f64> {
-        self.heat_constant
+        let mut heat: Vec<f64> = self
+            .heat_constant
             .iter()
             .zip(&self.heat_rate)
             .map(|(c, r)| c + t * r)
-            .collect()
+            .collect();
+        if let Some(extra) = &self.extra_loads {
+            extra.add_heat(self, t, &mut heat);
+        }
+        heat
     }
 
     /// |Γ_C| by the nodal weights.

@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 
 pub mod atomic;
+pub mod convergence_plot;
 pub mod csv;
 pub mod fields;
 pub mod plot;
