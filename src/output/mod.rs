@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 pub mod atomic;
 pub mod csv;
 pub mod fields;
+pub mod figures;
 pub mod plot;
 pub mod vtk;
 
