@@ -158,7 +158,8 @@ struct ArrowLayout {
     stride: usize,
     /// Length [m] of an arrow of size `unit`.
     full_length: f64,
-    /// |ξ| [N/m] drawn at `full_length`: the largest |ξ| of the figure, rounded up.
+    /// |ξ| [N/m] drawn at `full_length`: the figure's `force_unit`, else the largest |ξ| of
+    /// the figure rounded up.
     unit: f64,
     /// Offset [m] of the arrows from Γ_C along ν (outside the body).
     gap: f64,
@@ -184,7 +185,15 @@ impl DeformedFigure<'_> {
     }
 
     fn arrow_layout(&self) -> ArrowLayout {
-        let first = &self.panels[0];
+        let Some(first) = self.panels.first() else {
+            return ArrowLayout {
+                spacing: 1.0,
+                stride: 1,
+                full_length: 1.0,
+                unit: 1.0,
+                gap: 0.5,
+            };
+        };
         // Node spacing along Γ_C from the sorted tangential coordinates.
         let mut s: Vec<f64> = first
             .contact
@@ -199,7 +208,7 @@ impl DeformedFigure<'_> {
             .fold(f64::INFINITY, f64::min);
         let extent = mesh_extent(first.mesh);
         let spacing = if spacing.is_finite() { spacing } else { extent };
-        // Arrows of about 3.5% of the body's size, at least one node apart.
+        // Arrows of about 5% of the body's size, at least one node apart.
         let wanted = 0.05 * extent;
         let stride = ((wanted / spacing).ceil() as usize).max(1);
         let full_length = 0.9 * stride as f64 * spacing;

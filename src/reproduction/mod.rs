@@ -308,6 +308,13 @@ pub fn make_figures(
         });
     }
     scenario.validate()?;
+    if scenario.output.times.is_empty() {
+        return Err(ReproductionError::InvalidOption {
+            option: "output.times",
+            value: "[]".into(),
+            expected: "at least one output time: the panels of Fig. 2".into(),
+        });
+    }
     std::fs::create_dir_all(dir).map_err(OutputError::io(dir))?;
     let paper = is_paper_example(scenario);
     let expansion = scenario.material.thermal_expansion;
