@@ -108,17 +108,29 @@ pub struct Summary {
 
 /// Runs a scenario end to end.
 pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> {
-    run_with_state(scenario, options).map(|(summary, _)| summary)
+    run_observed(scenario, options, |_, _, _| ()).map(|run| run.summary)
 }
 
 /// Runs without writing files or drawing progress (tests and studies); also returns the state
 /// at T.
 pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
-    run_with_state(scenario, &RunOptions::default())
+    run_observed(scenario, &RunOptions::default(), |_, _, _| ()).map(|run| (run.summary, run.state))
 }
 
-/// [`run`], also returning the state at T.
-pub fn run_with_state(scenario: &Scenario, options: &RunOptions) -> Result<(Summary, State), Error> {
+/// A finished run: its summary, the state at T and the discrete problem.
+pub struct Run {
+    pub summary: Summary,
+    pub state: State,
+    pub problem: Problem,
+}
+
+/// [`run`], with `observer` called on every new state (with the step's solver figures), and
+/// returning the problem and the state at T too.
+pub fn run_observed(
+    scenario: &Scenario,
+    options: &RunOptions,
+    mut observer: impl FnMut(&Problem, &State, &crate::solver::StepInfo),
+) -> Result<Run, Error> {
     let start = Instant::now();
     let mut timings = Timings::default();
     let problem = Problem::new(scenario)?;
@@ -169,6 +181,7 @@ pub fn run_with_state(scenario: &Scenario, options: &RunOptions) -> Result<(Summ
     for _ in 0..n_steps {
         let (next, info) = solver.step(&state).inspect_err(|_| bar.abandon())?;
         state = next;
+        observer(&problem, &state, &info);
         outer_total += info.convexification_iterations;
         inner_total += info.inner_iterations;
         outer_max = outer_max.max(info.convexification_iterations);
@@ -236,7 +249,13 @@ pub fn run_with_state(scenario: &Scenario, options: &RunOptions) -> Result<(Summ
         summary.timings.output = output_time;
         summary.timings.total = start.elapsed().as_secs_f64();
     }
-    Ok((summary, state))
+    drop(solver);
+    drop(system);
+    Ok(Run {
+        summary,
+        state,
+        problem,
+    })
 }
 
 /// The figures of one output time.

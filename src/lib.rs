@@ -38,7 +38,8 @@
 //! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
 //! [`contact`] (laws) → [`problem`] (a scenario made discrete) → [`solver`] (step system and
 //! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
-//! the input, [`norms`] measures, [`verification`] runs the convergence studies.
+//! the input, [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
+//! regenerates the paper's Section 6 (figures and the study of its open points).
 
 pub mod bench;
 pub mod contact;
@@ -50,6 +51,7 @@ pub mod mesh;
 pub mod norms;
 pub mod output;
 pub mod problem;
+pub mod reproduction;
 pub mod scenario;
 pub mod solver;
 pub mod time;

@@ -6,6 +6,8 @@
 //! thermocontact run --set mesh.nx=256 --set mesh.ny=64 --set time.steps=64
 //! thermocontact scenario > my.toml          # the default scenario, commented
 //! thermocontact converge                    # Fig. 4 and the manufactured solution, h = 1/2 … 1/64
+//! thermocontact figures --out out/figures   # the paper's Figs. 2 and 3 (PNG + SVG)
+//! thermocontact reproduce --report docs/reproduction.md   # figures + study, tables into the report
 //! ```
 
 use std::path::PathBuf;
@@ -14,6 +16,8 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use thermocontact::driver::{self, RunOptions, Summary};
+use thermocontact::reproduction::study::{self, StudyPlan};
+use thermocontact::reproduction::{self as repro, FigureOptions, FiguresMade};
 use thermocontact::scenario::{Scenario, DEFAULT_TOML};
 use thermocontact::verification::{self, study::LevelRun};
 
@@ -108,6 +112,47 @@ enum Command {
         #[arg(long, default_value = "out/converge")]
         out: PathBuf,
     },
+    /// Draw the paper's Section 6 figures for a scenario, as PNG and SVG: Fig. 2 (deformed
+    /// configuration, temperature, friction stresses, stick/slip nodes at the output times),
+    /// Fig. 3 (the same at t = T for other α_exp), the slip count against time and θ, w_τ, ξ
+    /// along Γ_C. Also writes summary.json of the Fig. 2 run.
+    Figures {
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+        /// Output folder (created if missing).
+        #[arg(long, default_value = "out/figures")]
+        out: PathBuf,
+        #[command(flatten)]
+        figures: FigureArgs,
+    },
+    /// Reproduce the paper's Section 6: the figures, then the study of its open points (θ_D = 0
+    /// or θ₀, meshes, time steps, α_exp, slip tolerance) as Markdown tables (tables.md) and JSON
+    /// (study.json); `--report FILE` also refreshes the tables in FILE (docs/reproduction.md).
+    Reproduce {
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+        /// Output folder for figures and tables (created if missing).
+        #[arg(long, default_value = "docs/figures")]
+        out: PathBuf,
+        /// Markdown report whose generated section (between the reproduce:begin/end markers) is
+        /// replaced by the new tables.
+        #[arg(long, value_name = "FILE")]
+        report: Option<PathBuf>,
+        /// Meshes of the study: nx values (ny = nx·L₂/L₁), each run with every --steps.
+        #[arg(long, value_delimiter = ',', default_values_t = [16, 32, 40, 64, 128])]
+        meshes: Vec<usize>,
+        /// Numbers of time steps N (k = T/N) of the study.
+        #[arg(long, value_delimiter = ',', default_values_t = [16, 32, 64])]
+        steps: Vec<usize>,
+        /// Finer meshes run at the scenario's N and α_exp only (the paper's h = 1/64 is nx = 256).
+        #[arg(long, value_delimiter = ',', default_values_t = [256])]
+        fine_meshes: Vec<usize>,
+        /// Skip the fine meshes (a quicker study).
+        #[arg(long)]
+        no_fine: bool,
+        #[command(flatten)]
+        figures: FigureArgs,
+    },
 }
 
 /// The studies of `converge`.
@@ -116,6 +161,26 @@ enum Study {
     Paper,
     Manufactured,
     Both,
+}
+
+/// Options of the figures.
+#[derive(clap::Args)]
+struct FigureArgs {
+    /// Displacement scale of the deformed configurations (1, as in the paper, draws x + u).
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// α_exp values [1/°C] of Fig. 3 (the paper's: 1e-4 and 1e-3); also the α_exp of the study.
+    #[arg(long, value_delimiter = ',', default_values_t = [1e-4, 1e-3])]
+    expansions: Vec<f64>,
+}
+
+impl FigureArgs {
+    fn options(&self) -> FigureOptions {
+        FigureOptions {
+            scale: self.scale,
+            expansions: self.expansions.clone(),
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -161,6 +226,65 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             println!(
                 "results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
                 out.display()
+            );
+            Ok(())
+        }
+        Command::Figures { scenario, out, figures } => {
+            let scenario = scenario.load()?;
+            print_setup(&scenario);
+            let made = repro::make_figures(&scenario, &out, &figures.options())?;
+            print_figures(&made);
+            Ok(())
+        }
+        Command::Reproduce {
+            scenario,
+            out,
+            report,
+            meshes,
+            steps,
+            fine_meshes,
+            no_fine,
+            figures,
+        } => {
+            let start = std::time::Instant::now();
+            let scenario = scenario.load()?;
+            print_setup(&scenario);
+            let made = repro::make_figures(&scenario, &out, &figures.options())?;
+            print_figures(&made);
+            let mut plan = StudyPlan::paper(&scenario);
+            plan.meshes = meshes;
+            plan.steps = steps;
+            plan.fine_meshes = if no_fine { Vec::new() } else { fine_meshes };
+            let mut expansions = figures.expansions.clone();
+            expansions.push(scenario.material.thermal_expansion);
+            expansions.sort_by(f64::total_cmp);
+            expansions.dedup();
+            plan.expansions = expansions;
+            println!("\nthe study (θ_D, mesh, k, α_exp: slip nodes at the output times):");
+            let result = study::run_study(&scenario, &plan, |i, n, r| {
+                let c = &r.case;
+                println!(
+                    "  [{i:>2}/{n}] θ_D = {:>4}, {:>3} × {:<3}, k = 1/{:<3}, α_exp = {:e}: {:?} ({:.1} s)",
+                    c.boundary_temperature, c.nx, c.ny, c.steps, c.expansion, r.slip_nodes, r.wall_time
+                );
+            })?;
+            let tables = result.tables();
+            let tables_path = out.join("tables.md");
+            thermocontact::output::write_atomic(&tables_path, tables.as_bytes())
+                .with_context(|| format!("cannot write {}", tables_path.display()))?;
+            let json = serde_json::to_vec_pretty(&result).expect("the study serializes");
+            let json_path = out.join("study.json");
+            thermocontact::output::write_atomic(&json_path, &json)
+                .with_context(|| format!("cannot write {}", json_path.display()))?;
+            println!("\n{tables}");
+            if let Some(report) = &report {
+                study::update_report(report, &tables)?;
+                println!("tables written into {}", report.display());
+            }
+            println!(
+                "figures and tables in {}/ (tables.md, study.json); reproduce took {:.0} s",
+                out.display(),
+                start.elapsed().as_secs_f64()
             );
             Ok(())
         }
@@ -282,6 +406,22 @@ fn converge(scenario: ScenarioArgs, n_levels: usize, study: Study, out: PathBuf)
         .collect();
     println!("results written to {}/ ({})", out.display(), names.join(", "));
     Ok(())
+}
+
+fn print_figures(made: &FiguresMade) {
+    println!();
+    println!("{:>12} {:>8} {:>6} {:>6}", "α_exp", "t [s]", "slip", "stick");
+    let main = std::iter::once((None, &made.main));
+    for (alpha, summary) in main.chain(made.expansions.iter().map(|(a, s)| (Some(*a), s))) {
+        let label = alpha.map_or("scenario".to_string(), |a| format!("{a:e}"));
+        for o in &summary.outputs {
+            println!("{:>12} {:>8.4} {:>6} {:>6}", label, o.t, o.slip_nodes, o.stick_nodes);
+        }
+    }
+    for file in &made.files {
+        println!("wrote {}", file.display());
+    }
+    println!("figures took {:.1} s", made.wall_time);
 }
 
 fn print_setup(s: &Scenario) {

@@ -168,6 +168,6 @@ fn contact_weights_sum_to_the_contact_length() {
     assert!((problem.contact_measure() - 40.0).abs() < 1e-12);
     // The clamped corner (0, 0) carries no friction; the corner (40, 0) is a contact node with a
     // prescribed temperature.
-    assert_eq!(problem.contact.len(), 40);
+    assert_eq!(problem.contact.len(), problem.scenario.mesh.nx);
     assert!(problem.contact.last().unwrap().theta_dof.is_none());
 }

@@ -11,6 +11,7 @@ pub mod atomic;
 pub mod convergence_plot;
 pub mod csv;
 pub mod fields;
+pub mod figures;
 pub mod plot;
 pub mod vtk;
 

@@ -163,7 +163,11 @@ impl<'a> FastSolver<'a> {
                 dw / w_scale.max(f64::MIN_POSITIVE),
                 dxi / g_scale.max(f64::MIN_POSITIVE)
             );
-            if dw <= self.paper_params.tolerance * w_scale && dxi <= self.paper_params.tolerance * g_scale {
+            // The frozen bounds lag one iterate behind; also require the nonmonotone law itself
+            // to hold to the tolerance at every node (relative to the smallest bound).
+            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+            let settled = dw <= self.paper_params.tolerance * w_scale && dxi <= self.paper_params.tolerance * g_scale;
+            if settled && step.residuals(w_free, &w, &xi, None).1 <= self.paper_params.tolerance * g_min {
                 return Ok(NewtonResult {
                     w,
                     xi,
