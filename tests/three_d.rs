@@ -358,6 +358,7 @@ fn symmetry_planes_shape_the_space_and_bad_ones_are_named() {
         ],
     )
     .unwrap();
+    assert_eq!(Scenario::load(Some(&slab.to_toml()), &[]).unwrap(), slab);
     let problem = Problem::new(&slab).unwrap();
     // Nodes: 5 × 3 × 3 = 45; clamped x = 0: 9; contact (z = 0, x > 0): 12 of which 8 on a
     // y face (1 unknown: w_x) and 4 inside (2); symmetry-only nodes (y face, z > 0, x > 0):
@@ -446,5 +447,13 @@ fn paper3d_scenario_runs_from_the_command_line() {
         assert!(piece.cells.types.iter().all(|t| *t == vtkio::model::CellType::Tetra));
         assert_eq!(piece.cells.types.len(), 6 * 8 * 2 * 2);
     }
+    // The resolved 3D scenario is saved and loads back to the same scenario.
+    let saved = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let expected = Scenario::load(
+        Some(PAPER3D),
+        &["mesh.nx=8", "mesh.ny=2", "mesh.nz=2", "time.steps=8"].map(String::from),
+    )
+    .unwrap();
+    assert_eq!(Scenario::load(Some(&saved), &[]).unwrap(), expected);
     std::fs::remove_dir_all(&out).ok();
 }
