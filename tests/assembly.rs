@@ -1,9 +1,10 @@
 //! Assembly checks: patch tests, rigid-body modes, mass sums, the thermal coupling G and the Γ_C
 //! weights. Each compares assembled matrices against a property P1 must have exactly.
 
-use faer::linalg::solvers::Solve;
+mod common;
+use common::solve_interior;
+
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
-use thermocontact::fem::sparse::CscMatrix;
 use thermocontact::material::{Isotropic, Material};
 use thermocontact::mesh::{rectangle, Mesh};
 use thermocontact::{Problem, Scenario};
@@ -33,30 +34,6 @@ fn distorted_mesh() -> (Mesh, Vec<bool>) {
         }
     }
     (mesh, boundary)
-}
-
-/// Solves K_ii x_i = −K_ib x_b (dense) for the nodes not marked fixed; `dofs` per node.
-fn solve_interior(k: &CscMatrix, fixed: &[bool], dofs: usize, values: &[f64]) -> Vec<f64> {
-    let free: Vec<usize> = (0..k.n_rows).filter(|&i| !fixed[i / dofs]).collect();
-    let n = free.len();
-    let mut a = faer::Mat::<f64>::zeros(n, n);
-    let mut b = faer::Mat::<f64>::zeros(n, 1);
-    for (r, &i) in free.iter().enumerate() {
-        for (j, v) in values.iter().enumerate() {
-            if fixed[j / dofs] {
-                b[(r, 0)] -= k.get(i, j) * v;
-            }
-        }
-        for (c, &j) in free.iter().enumerate() {
-            a[(r, c)] = k.get(i, j);
-        }
-    }
-    let x = a.partial_piv_lu().solve(&b);
-    let mut out = values.to_vec();
-    for (r, &i) in free.iter().enumerate() {
-        out[i] = x[(r, 0)];
-    }
-    out
 }
 
 #[test]

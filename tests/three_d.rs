@@ -2,14 +2,15 @@
 //! sums), the disc friction law in the tangent plane of Γ_C, the plane-strain consistency of a
 //! 3D slab with the 2D example, and the 3D scenario through the command line.
 
+mod common;
+use common::solve_interior;
+
 use std::path::PathBuf;
 use std::process::Command;
 
-use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, SlipWeakening};
 use thermocontact::driver::run_quiet;
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
-use thermocontact::fem::sparse::CscMatrix;
 use thermocontact::material::{Isotropic, Material};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::solver::system::{State, StepSystem};
@@ -43,30 +44,6 @@ fn distorted_box() -> (Mesh, Vec<bool>) {
         }
     }
     (mesh, boundary)
-}
-
-/// Solves K_ii x_i = −K_ib x_b (dense) for the nodes not marked fixed; `dofs` per node.
-fn solve_interior(k: &CscMatrix, fixed: &[bool], dofs: usize, values: &[f64]) -> Vec<f64> {
-    let free: Vec<usize> = (0..k.n_rows).filter(|&i| !fixed[i / dofs]).collect();
-    let n = free.len();
-    let mut a = faer::Mat::<f64>::zeros(n, n);
-    let mut b = faer::Mat::<f64>::zeros(n, 1);
-    for (r, &i) in free.iter().enumerate() {
-        for (j, v) in values.iter().enumerate() {
-            if fixed[j / dofs] {
-                b[(r, 0)] -= k.get(i, j) * v;
-            }
-        }
-        for (c, &j) in free.iter().enumerate() {
-            a[(r, c)] = k.get(i, j);
-        }
-    }
-    let x = a.partial_piv_lu().solve(&b);
-    let mut out = values.to_vec();
-    for (r, &i) in free.iter().enumerate() {
-        out[i] = x[(r, 0)];
-    }
-    out
 }
 
 fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
