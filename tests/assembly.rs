@@ -2,23 +2,11 @@
 //! weights. Each compares assembled matrices against a property P1 must have exactly.
 
 mod common;
-use common::solve_interior;
+use common::{paper_material, solve_interior};
 
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
-use thermocontact::material::{Isotropic, Material};
 use thermocontact::mesh::{rectangle, Mesh};
 use thermocontact::{Problem, Scenario};
-
-fn paper_material() -> Material {
-    Material {
-        density: 100.0,
-        heat_capacity: 0.1,
-        viscosity: Isotropic::viscosity(50.0, 200.0),
-        elasticity: Isotropic::elasticity(10_000.0, 0.3),
-        expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
-        conductivity: 0.5,
-    }
-}
 
 /// A 6 × 4 mesh of (0, 3) × (0, 2) whose interior nodes are moved off the grid, so that the
 /// patch tests do not profit from symmetry.

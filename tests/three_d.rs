@@ -3,7 +3,7 @@
 //! 3D slab with the 2D example, and the 3D scenario through the command line.
 
 mod common;
-use common::solve_interior;
+use common::{paper_material, solve_interior};
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -11,24 +11,12 @@ use std::process::Command;
 use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, SlipWeakening};
 use thermocontact::driver::run_quiet;
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
-use thermocontact::material::{Isotropic, Material};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::solver::system::{State, StepSystem};
 use thermocontact::time::{contact_rows, StepSolver};
 use thermocontact::{Problem, Scenario};
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
-
-fn paper_material() -> Material {
-    Material {
-        density: 100.0,
-        heat_capacity: 0.1,
-        viscosity: Isotropic::viscosity(50.0, 200.0),
-        elasticity: Isotropic::elasticity(10_000.0, 0.3),
-        expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
-        conductivity: 0.5,
-    }
-}
 
 /// A 4 × 3 × 3 mesh of (0, 3) × (0, 2) × (0, 2) whose interior nodes are moved off the grid.
 fn distorted_box() -> (Mesh, Vec<bool>) {

@@ -2,6 +2,19 @@
 
 use faer::linalg::solvers::Solve;
 use thermocontact::fem::sparse::CscMatrix;
+use thermocontact::material::{Isotropic, Material};
+
+/// The material of the paper's Section 6 example.
+pub fn paper_material() -> Material {
+    Material {
+        density: 100.0,
+        heat_capacity: 0.1,
+        viscosity: Isotropic::viscosity(50.0, 200.0),
+        elasticity: Isotropic::elasticity(10_000.0, 0.3),
+        expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
+        conductivity: 0.5,
+    }
+}
 
 /// Solves K_ii x_i = −K_ib x_b (dense) for the nodes not marked fixed; `dofs` per node.
 pub fn solve_interior(k: &CscMatrix, fixed: &[bool], dofs: usize, values: &[f64]) -> Vec<f64> {
