@@ -99,14 +99,16 @@ pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
             }
         }
     }
-    Mesh {
+    let mut mesh = Mesh {
         dim: 3,
         coords,
         cells: tets,
         facets,
         facet_parts,
         part_names: cuboid_part_names().iter().map(|s| s.to_string()).collect(),
-    }
+    };
+    super::topology::orient_facets_outward(&mut mesh);
+    mesh
 }
 
 #[cfg(test)]
@@ -178,6 +180,21 @@ mod tests {
             assert!(
                 *count == 2 || boundary.binary_search(f).is_ok(),
                 "face {f:?} seen {count}×"
+            );
+        }
+    }
+
+    #[test]
+    fn cuboid_facets_point_outward() {
+        let mesh = cuboid([1.0, 2.0, 3.0], [2, 2, 2]);
+        for f in 0..mesh.n_facets() {
+            let part = mesh.facet_parts[f];
+            let mut expected = [0.0; 3];
+            expected[part / 2] = if part % 2 == 0 { -1.0 } else { 1.0 };
+            let n = mesh.facet_normal(f);
+            assert!(
+                (0..3).all(|c| (n[c] - expected[c]).abs() < 1e-14),
+                "{n:?} vs {expected:?}"
             );
         }
     }

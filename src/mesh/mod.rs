@@ -10,6 +10,7 @@
 
 mod cuboid;
 mod structured;
+pub(crate) mod topology;
 
 pub use cuboid::{cuboid, cuboid_part_names};
 pub use structured::{rectangle, rectangle_part_names};
@@ -23,7 +24,8 @@ pub struct Mesh {
     pub coords: Vec<[f64; 3]>,
     /// Cell connectivity, flat, `dim + 1` nodes per cell, positively oriented.
     pub cells: Vec<usize>,
-    /// Boundary facet connectivity, flat, `dim` nodes per facet.
+    /// Boundary facet connectivity, flat, `dim` nodes per facet, ordered so that the right-hand
+    /// normal points out of Ω ([`Mesh::facet_normal`]).
     pub facets: Vec<usize>,
     /// Boundary part index of each facet.
     pub facet_parts: Vec<usize>,
@@ -120,6 +122,37 @@ impl Mesh {
             }
         }
         normal
+    }
+
+    /// The normal of facet `f` by the right-hand rule on its node order, scaled by the facet's
+    /// measure (2D: the edge x₀x₁ turned by −90°; 3D: ½ (x₁ − x₀) × (x₂ − x₀)). Boundary facets
+    /// are stored oriented, so this points out of Ω.
+    pub fn facet_area_vector(&self, f: usize) -> [f64; 3] {
+        let x: Vec<[f64; 3]> = self.facet(f).iter().map(|&i| self.coords[i]).collect();
+        let e = [x[1][0] - x[0][0], x[1][1] - x[0][1], x[1][2] - x[0][2]];
+        if self.dim == 2 {
+            [e[1], -e[0], 0.0]
+        } else {
+            let g = [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]];
+            [
+                0.5 * (e[1] * g[2] - e[2] * g[1]),
+                0.5 * (e[2] * g[0] - e[0] * g[2]),
+                0.5 * (e[0] * g[1] - e[1] * g[0]),
+            ]
+        }
+    }
+
+    /// The measure of facet `f` (length in 2D, area in 3D).
+    pub fn facet_measure(&self, f: usize) -> f64 {
+        let a = self.facet_area_vector(f);
+        (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+    }
+
+    /// The unit outward normal ν of boundary facet `f`.
+    pub fn facet_normal(&self, f: usize) -> [f64; 3] {
+        let a = self.facet_area_vector(f);
+        let len = self.facet_measure(f);
+        a.map(|c| c / len)
     }
 
     /// Measure |Ω| (sum of cell measures).

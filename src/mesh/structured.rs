@@ -48,14 +48,16 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
         push(node(i, 0), node(i + 1, 0), 2);
         push(node(i, ny), node(i + 1, ny), 3);
     }
-    Mesh {
+    let mut mesh = Mesh {
         dim: 2,
         coords,
         cells,
         facets,
         facet_parts,
         part_names: rectangle_part_names().iter().map(|s| s.to_string()).collect(),
-    }
+    };
+    super::topology::orient_facets_outward(&mut mesh);
+    mesh
 }
 
 #[cfg(test)]
@@ -71,5 +73,20 @@ mod tests {
         assert!((mesh.volume() - 400.0).abs() < 1e-10);
         let bottom = mesh.part_index("bottom").unwrap();
         assert_eq!(mesh.nodes_on(&[bottom]).iter().filter(|&&b| b).count(), 9);
+    }
+
+    #[test]
+    fn rectangle_facets_point_outward() {
+        let mesh = rectangle(4.0, 2.0, 4, 2);
+        let expected = [[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]];
+        for f in 0..mesh.n_facets() {
+            let n = mesh.facet_normal(f);
+            let e = expected[mesh.facet_parts[f]];
+            assert!(
+                (n[0] - e[0]).abs() < 1e-14 && (n[1] - e[1]).abs() < 1e-14,
+                "{n:?} vs {e:?}"
+            );
+        }
+        assert!((mesh.facet_measure(0) - 1.0).abs() < 1e-14);
     }
 }
