@@ -273,7 +273,7 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
         t: state.n as f64 * problem.time_step(),
         slip_nodes,
         stick_nodes: contact.len() - slip_nodes,
-        max_slip_rate: contact.iter().map(|r| r.w_tau[0].hypot(r.w_tau[1])).fold(0.0, f64::max),
+        max_slip_rate: contact.iter().map(ContactRow::slip_rate).fold(0.0, f64::max),
         min_temperature: state.theta.iter().cloned().fold(f64::INFINITY, f64::min),
         max_temperature: state.theta.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         max_displacement,

@@ -17,13 +17,19 @@ pub fn gradient(matrices: &Matrices, theta: &[f64]) -> f64 {
     matrices.gradient_gram.quadratic_form(theta).max(0.0).sqrt()
 }
 
-/// L²(Γ_C) norm of a nodal field on the frictional contact nodes (tangent coordinates).
-pub fn contact_l2(problem: &Problem, field: &[[f64; 2]]) -> f64 {
+/// L²(Γ_C) norm of a nodal field on the frictional contact nodes: `field` node-major with the
+/// same number of components at every node (d − 1 tangent coordinates, or 1 for a scalar).
+pub fn contact_l2(problem: &Problem, field: &[f64]) -> f64 {
+    let n = problem.contact.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let width = field.len() / n;
     problem
         .contact
         .iter()
-        .zip(field)
-        .map(|(node, v)| node.weight * (v[0] * v[0] + v[1] * v[1]))
+        .zip(field.chunks_exact(width))
+        .map(|(node, v)| node.weight * v.iter().map(|x| x * x).sum::<f64>())
         .sum::<f64>()
         .sqrt()
 }

@@ -1,27 +1,32 @@
 //! The discrete problem: a scenario turned into a mesh, spaces, assembled matrices, loads and
 //! laws — everything that stays fixed during a run.
 
+use crate::contact::frames::{contact_frames, orthogonal_complement};
 use crate::contact::{
     FrictionLaw, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange, SlipWeakening, Tresca,
 };
 use crate::error::Error;
 use crate::fem::assembly::{self, Matrices};
-use crate::fem::dofs::{tangent_basis, TemperatureSpace, VelocitySpace};
+use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
 use crate::scenario::{FrictionSpec, Scenario};
 
-/// A node of Γ_C that carries friction: not clamped.
-#[derive(Debug, Clone, Copy)]
+/// A node of Γ_C that carries friction: not clamped, and free to slide along at least one
+/// tangent of its frame.
+#[derive(Debug, Clone)]
 pub struct ContactNode {
     /// Mesh node.
     pub node: usize,
     /// ℓ_i = ∫_ΓC φ_i, the nodal quadrature weight.
     pub weight: f64,
-    /// Velocity unknowns of the tangential components (first d − 1 used); `usize::MAX` marks a
-    /// coordinate held at zero by a symmetry plane through the node (see
-    /// [`VelocitySpace::with_planes`]).
-    pub tangent_dofs: [usize; 2],
+    /// ν_i, the unit outward normal ([`crate::contact::frames`]).
+    pub normal: [f64; 3],
+    /// t_{i,1} … t_{i,d−1}: the node's orthonormal tangent basis; w_τ and ξ are coordinates in it.
+    pub tangents: Vec<[f64; 3]>,
+    /// The velocity unknown of each tangent coordinate (d − 1 entries); `None` where the
+    /// coordinate is held at zero (a corner of Γ_C or a symmetry plane through the node).
+    pub tangent_dofs: Vec<Option<usize>>,
     /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
     pub theta_dof: Option<usize>,
 }
@@ -41,8 +46,6 @@ pub struct Problem {
     pub contact: Vec<ContactNode>,
     /// ℓ_p on every node of Γ_C (including clamped ones), zero elsewhere.
     pub contact_weights: Vec<f64>,
-    /// Orthonormal tangent basis of Γ_C.
-    pub tangents: Vec<[f64; 3]>,
     pub friction: Box<dyn FrictionLaw>,
     pub exchange: Box<dyn HeatExchange>,
     pub heating: Box<dyn FrictionalHeating>,
@@ -112,20 +115,27 @@ impl Problem {
 
         // Constraints; Dirichlet wins at corners.
         let clamped = mesh.nodes_on(&dirichlet);
-        let on_contact = mesh.nodes_on(&contact_parts);
-        let contact_marks: Vec<bool> = on_contact.iter().zip(&clamped).map(|(&c, &cl)| c && !cl).collect();
-        let tangents = tangent_basis(&scenario.boundary.contact_normal);
         let planes = symmetry_planes(&mesh, scenario)?;
-        let (velocity, tangent_dofs) = VelocitySpace::with_planes(d, &clamped, &contact_marks, &tangents, &planes)
-            .map_err(|e| Error::InvalidValue {
-                key: "boundary.symmetry".into(),
-                value: format!("{:?}", scenario.boundary.symmetry),
-                expected: format!(
-                    "symmetry planes whose normal is, where they meet Γ_C (node at {:?}), along ν or along a \
-                     tangent of Γ_C (t = {:?}); ν_s = {:?} is along neither",
-                    mesh.coords[e.node], tangents, e.normal
-                ),
-            })?;
+        let frames = contact_frames(
+            d,
+            mesh.n_nodes(),
+            mesh.facets_of(&contact_parts)
+                .map(|f| (mesh.facet(f).to_vec(), mesh.facet_area_vector(f))),
+            &planes,
+        );
+        let mut bases: Vec<NodeBasis> = (0..mesh.n_nodes())
+            .map(|p| match (clamped[p], planes[p].is_empty()) {
+                (true, _) => NodeBasis::Held,
+                (false, true) => NodeBasis::Cartesian,
+                (false, false) => NodeBasis::Along(orthogonal_complement(d, &planes[p])),
+            })
+            .collect();
+        for (p, frame) in &frames {
+            if !clamped[*p] {
+                bases[*p] = NodeBasis::Along(frame.tangents[..frame.n_free].to_vec());
+            }
+        }
+        let velocity = VelocitySpace::new(d, &bases);
         let theta_fixed = mesh.nodes_on(&[dirichlet.clone(), neumann.clone()].concat());
         let temperature = TemperatureSpace::new(&theta_fixed);
 
@@ -137,14 +147,18 @@ impl Problem {
         let matrices = assembly::assemble_matrices(&mesh, &material, &contact_parts, k_e);
 
         let contact_weights = assembly::boundary_weights(&mesh, &contact_parts);
-        let contact = (0..mesh.n_nodes())
-            .filter_map(|p| {
-                tangent_dofs[p].map(|dofs| ContactNode {
-                    node: p,
-                    weight: contact_weights[p],
-                    tangent_dofs: dofs,
-                    theta_dof: temperature.free[p],
-                })
+        let contact = frames
+            .into_iter()
+            .filter(|(p, frame)| !clamped[*p] && frame.n_free > 0)
+            .map(|(p, frame)| ContactNode {
+                node: p,
+                weight: contact_weights[p],
+                normal: frame.normal,
+                tangent_dofs: (0..d - 1)
+                    .map(|k| (k < frame.n_free).then(|| velocity.unknown(p, k)))
+                    .collect(),
+                tangents: frame.tangents,
+                theta_dof: temperature.free[p],
             })
             .collect();
 
@@ -189,7 +203,6 @@ impl Problem {
             matrices,
             contact,
             contact_weights,
-            tangents,
             friction,
             exchange: Box::new(exchange),
             heating: Box::new(LinearHeating {

@@ -60,7 +60,6 @@ pub struct BoundarySpec {
     pub dirichlet: Vec<String>,
     pub neumann: Vec<String>,
     pub contact: Vec<String>,
-    pub contact_normal: Vec<f64>,
     /// θ_D on Γ_D ∪ Γ_N.
     pub temperature: f64,
     /// Symmetry (roller) planes: w·ν = 0, no shear traction, no heat flux (optional; none in
@@ -277,15 +276,6 @@ impl Scenario {
         }
         if self.boundary.contact.is_empty() {
             return Err(invalid("boundary.contact", &"[]", "at least one part for Γ_C"));
-        }
-        vector("boundary.contact_normal", &self.boundary.contact_normal, d)?;
-        let norm = self.boundary.contact_normal.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if (norm - 1.0).abs() > 1e-8 {
-            return Err(invalid(
-                "boundary.contact_normal",
-                &self.boundary.contact_normal,
-                "a unit vector",
-            ));
         }
 
         let m = &self.material;

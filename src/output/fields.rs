@@ -57,11 +57,8 @@ pub fn nodal_contact_fields(problem: &Problem, rows: &[ContactRow]) -> (Vec<f64>
     let mut friction = vec![0.0; problem.mesh.n_nodes() * d];
     for row in rows {
         status[row.node] = if row.slip { 2.0 } else { 1.0 };
-        for (k, t) in problem.tangents.iter().enumerate() {
-            for c in 0..d {
-                friction[row.node * d + c] += row.xi[k] * t[c];
-            }
-        }
+        let xi = row.friction_vector();
+        friction[row.node * d..(row.node + 1) * d].copy_from_slice(&xi[..d]);
     }
     (status, friction)
 }

@@ -216,7 +216,7 @@ impl DeformedFigure<'_> {
             .panels
             .iter()
             .flat_map(|p| p.contact.iter())
-            .map(|r| r.xi[0].hypot(r.xi[1]))
+            .map(|r| crate::solver::system::norm2(&r.xi))
             .fold(0.0, f64::max);
         ArrowLayout {
             spacing,

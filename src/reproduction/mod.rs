@@ -295,8 +295,10 @@ pub fn make_figures(
         format_number(scenario.boundary.temperature),
         format_number(scenario.solver.slip_tolerance)
     );
-    let tangent = [main.problem.tangents[0][0], main.problem.tangents[0][1]];
-    let normal = [scenario.boundary.contact_normal[0], scenario.boundary.contact_normal[1]];
+    // The paper's Γ_C is flat: the first node's frame serves the whole figure.
+    let frame = &main.problem.contact[0];
+    let tangent = [frame.tangents[0][0], frame.tangents[0][1]];
+    let normal = [frame.normal[0], frame.normal[1]];
     let paper_at = |a: f64, t: f64| if paper { paper_count(a, t) } else { None };
     let mut files = Vec::new();
 

@@ -228,7 +228,8 @@ pub fn run_case(scenario: &Scenario, case: Case, tolerances: &[f64]) -> Result<C
     let clock = Instant::now();
     let run = record_run(scenario, false)?;
     let wall_time = clock.elapsed().as_secs_f64();
-    let tau = run.problem.tangents[0];
+    // Γ_C is flat in the study's scenarios: one tangent serves every node.
+    let tau = run.problem.contact[0].tangents[0];
     let along = |x: &[f64; 3]| x[0] * tau[0] + x[1] * tau[1] + x[2] * tau[2];
     let end = run
         .problem

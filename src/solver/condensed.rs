@@ -46,11 +46,8 @@ impl Condensation {
         let chunk = ((256usize << 20) / (8 * n.max(1))).clamp(1, 256);
         let mut friction = vec![0.0; n_t * n_t];
         let mut heat = vec![0.0; n_t * n_contact];
-        // `None` where a symmetry plane holds the tangential coordinate at zero (no unknown).
-        let tangent_dof = |col: usize| {
-            let dof = problem.contact[col / tangential].tangent_dofs[col % tangential];
-            (dof < n_w).then_some(dof)
-        };
+        // `None` where the tangential coordinate is held at zero (no unknown).
+        let tangent_dof = |col: usize| problem.contact[col / tangential].tangent_dofs[col % tangential];
         let mut block = Vec::new();
         let mut start = 0;
         while start < n_t {
@@ -82,8 +79,8 @@ impl Condensation {
             }
             start += width;
         }
-        // A coordinate held at zero by a symmetry plane gets an artificial compliance of the
-        // mean size, w_c = c̄ ξ_c: every solution of the friction law then has w_c = ξ_c = 0 (the
+        // A coordinate held at zero (a symmetry plane, or an edge of Γ_C in 3D) gets an
+        // artificial compliance of the mean size, w_c = c̄ ξ_c: every solution of the friction law then has w_c = ξ_c = 0 (the
         // plane carries the reaction), and the Newton matrices stay regular.
         let constrained: Vec<usize> = (0..n_t).filter(|&c| tangent_dof(c).is_none()).collect();
         if !constrained.is_empty() {

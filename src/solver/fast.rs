@@ -7,7 +7,7 @@
 
 use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
-use super::paper::{contact_tangential, flatten, unflatten, PaperParams, PaperSolver};
+use super::paper::{contact_tangential, PaperParams, PaperSolver};
 use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
 use super::StepInfo;
 use crate::error::Error;
@@ -67,7 +67,7 @@ impl<'a> FastSolver<'a> {
         let base = self.system.rhs(problem, previous, t);
         let mut x = base.clone();
         self.system.solve_in_place(&mut x);
-        let w_free = flatten(&tangential_velocities(problem, &x), tangential);
+        let w_free = tangential_velocities(problem, &x);
 
         let step = CondensedStep {
             condensation: self.condensation(),
@@ -77,8 +77,8 @@ impl<'a> FastSolver<'a> {
             augmentation: self.paper.augmentation,
             lu_cache: Default::default(),
         };
-        let guess_w = flatten(&contact_tangential(problem, &previous.w), tangential);
-        let guess_xi = flatten(&previous.xi, tangential);
+        let guess_w = contact_tangential(problem, &previous.w);
+        let guess_xi = previous.xi.clone();
         let mut info = StepInfo::default();
         let direct = if self.steepness < 1.0 {
             step.solve(&w_free, guess_w.clone(), guess_xi.clone(), None, self.params)
@@ -116,7 +116,7 @@ impl<'a> FastSolver<'a> {
                     .heat(t, norm(&result.w[i * tangential..(i + 1) * tangential]))
             })
             .collect();
-        let xi = unflatten(&result.xi, tangential);
+        let xi = result.xi;
         x.copy_from_slice(&base);
         add_contact_terms(problem, problem.n_w(), &xi, &heat, &mut x);
         self.system.solve_in_place(&mut x);

@@ -48,17 +48,11 @@ pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64;
     let m = &problem.matrices;
     let du = norms::energy(m, &diff(&new.u, &old.u));
     let dtheta = norms::gradient(m, &diff(&new.theta, &old.theta));
-    let xi_diff: Vec<[f64; 2]> = new
-        .xi
-        .iter()
-        .zip(&old.xi)
-        .map(|(a, b)| [a[0] - b[0], a[1] - b[1]])
-        .collect();
-    let dxi = norms::contact_l2(problem, &xi_diff);
+    let dxi = norms::contact_l2(problem, &diff(&new.xi, &old.xi));
     let zeta_new = norms::heat_exchange_multiplier(problem, &new.theta);
     let zeta_old = norms::heat_exchange_multiplier(problem, &old.theta);
-    let zeta_diff: Vec<[f64; 2]> = zeta_new.iter().zip(&zeta_old).map(|(a, b)| [a - b, 0.0]).collect();
-    let zeta_ref: Vec<[f64; 2]> = zeta_old.iter().map(|z| [*z, 0.0]).collect();
+    let zeta_diff = diff(&zeta_new, &zeta_old);
+    let zeta_ref = zeta_old;
     [
         ratio(du, norms::energy(m, &old.u)),
         ratio(dtheta, norms::gradient(m, &old.theta)),

@@ -77,7 +77,7 @@ impl<'a> PaperSolver<'a> {
         let base = self.system.rhs(problem, previous, t);
         let mut x = base.clone();
         self.system.solve_in_place(&mut x);
-        let w_free = flatten(&tangential_velocities(problem, &x), tangential);
+        let w_free = tangential_velocities(problem, &x);
 
         // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
         let mut current = previous.clone();
@@ -88,8 +88,8 @@ impl<'a> PaperSolver<'a> {
             .zip(&previous.w)
             .map(|(u, w)| u + problem.time_step() * w)
             .collect();
-        let mut xi = flatten(&previous.xi, tangential);
-        let mut w = flatten(&contact_tangential(problem, &previous.w), tangential);
+        let mut xi = previous.xi.clone();
+        let mut w = contact_tangential(problem, &previous.w);
         let speed = |w: &[f64], i: usize| {
             w[i * tangential..(i + 1) * tangential]
                 .iter()
@@ -150,11 +150,10 @@ impl<'a> PaperSolver<'a> {
             }
             // The full fields of this iterate: one solve with the converged contact terms.
             self.condensation.velocities(&w_free, &xi, &heat, &mut w);
-            let xi_nodes = unflatten(&xi, tangential);
             x.copy_from_slice(&base);
-            add_contact_terms(problem, n_w, &xi_nodes, &heat, &mut x);
+            add_contact_terms(problem, n_w, &xi, &heat, &mut x);
             self.system.solve_in_place(&mut x);
-            let next = self.system.state_from(problem, previous, &x, xi_nodes);
+            let next = self.system.state_from(problem, previous, &x, xi.clone());
             let increments = relative_increments(problem, &current, &next);
             info.convexification_iterations = m + 1;
             info.increments = increments;
@@ -175,22 +174,6 @@ impl<'a> PaperSolver<'a> {
     }
 }
 
-/// Node-major flat vector of the first `tangential` components.
-pub fn flatten(v: &[[f64; 2]], tangential: usize) -> Vec<f64> {
-    v.iter().flat_map(|x| x[..tangential].to_vec()).collect()
-}
-
-/// Inverse of [`flatten`].
-pub fn unflatten(v: &[f64], tangential: usize) -> Vec<[f64; 2]> {
-    v.chunks_exact(tangential)
-        .map(|c| {
-            let mut out = [0.0; 2];
-            out[..tangential].copy_from_slice(c);
-            out
-        })
-        .collect()
-}
-
 /// "u: …, θ: …, ξ: …, ζ: …" for error messages.
 pub fn format_increments(inc: &[f64; 4]) -> String {
     format!(
@@ -199,18 +182,16 @@ pub fn format_increments(inc: &[f64; 4]) -> String {
     )
 }
 
-/// Tangential velocities at the contact nodes from a full velocity vector.
-pub fn contact_tangential(problem: &Problem, w_full: &[f64]) -> Vec<[f64; 2]> {
+/// Tangential velocities at the contact nodes from a full velocity vector: node-major, in each
+/// node's tangent coordinates.
+pub fn contact_tangential(problem: &Problem, w_full: &[f64]) -> Vec<f64> {
     let d = problem.dim();
     problem
         .contact
         .iter()
-        .map(|node| {
-            let mut out = [0.0; 2];
-            for (k, t) in problem.tangents.iter().enumerate() {
-                out[k] = (0..d).map(|c| t[c] * w_full[node.node * d + c]).sum();
-            }
-            out
+        .flat_map(|node| {
+            let w = &w_full[node.node * d..(node.node + 1) * d];
+            node.tangents.iter().map(move |t| (0..d).map(|c| t[c] * w[c]).sum())
         })
         .collect()
 }

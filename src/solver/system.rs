@@ -32,8 +32,9 @@ pub struct State {
     pub u: Vec<f64>,
     /// Θ_n: temperature, one per node.
     pub theta: Vec<f64>,
-    /// ξ_n: friction stress at each contact node, tangent coordinates.
-    pub xi: Vec<[f64; 2]>,
+    /// ξ_n: friction stress at the contact nodes in their tangent coordinates, node-major,
+    /// d − 1 per node.
+    pub xi: Vec<f64>,
 }
 
 impl State {
@@ -51,7 +52,7 @@ impl State {
             w: uniform(&s.initial.velocity),
             u: uniform(&s.initial.displacement),
             theta: vec![s.initial.temperature; n_nodes],
-            xi: vec![[0.0; 2]; problem.contact.len()],
+            xi: vec![0.0; problem.contact.len() * (d - 1)],
         }
     }
 }
@@ -207,7 +208,7 @@ impl StepSystem {
     }
 
     /// The new state from the solution x of step n.
-    pub fn state_from(&self, problem: &Problem, previous: &State, x: &[f64], xi: Vec<[f64; 2]>) -> State {
+    pub fn state_from(&self, problem: &Problem, previous: &State, x: &[f64], xi: Vec<f64>) -> State {
         let w = problem.velocity.prolong(&x[..self.n_w]);
         let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
         let theta = problem
@@ -228,14 +229,14 @@ impl StepSystem {
 }
 
 /// Adds the contact terms Σ ℓ_i ξ_i · v_τ (velocity rows) and Σ ℓ_i h_i η (temperature rows of
-/// free contact nodes) to a right-hand side.
-pub fn add_contact_terms(problem: &Problem, n_w: usize, xi: &[[f64; 2]], heat: &[f64], rhs: &mut [f64]) {
+/// free contact nodes) to a right-hand side; ξ node-major in tangent coordinates.
+pub fn add_contact_terms(problem: &Problem, n_w: usize, xi: &[f64], heat: &[f64], rhs: &mut [f64]) {
     let tangential = problem.dim() - 1;
     for (i, node) in problem.contact.iter().enumerate() {
-        for k in 0..tangential {
-            // usize::MAX: a coordinate held at zero by a symmetry plane, no unknown to load.
-            if let Some(r) = rhs.get_mut(node.tangent_dofs[k]) {
-                *r += node.weight * xi[i][k];
+        for (k, dof) in node.tangent_dofs.iter().enumerate() {
+            // A held coordinate has no unknown to load.
+            if let Some(r) = dof {
+                rhs[*r] += node.weight * xi[i * tangential + k];
             }
         }
         if let Some(r) = node.theta_dof {
@@ -244,24 +245,17 @@ pub fn add_contact_terms(problem: &Problem, n_w: usize, xi: &[[f64; 2]], heat: &
     }
 }
 
-/// Tangential velocities w_τ at the contact nodes, in tangent coordinates, read from x.
-pub fn tangential_velocities(problem: &Problem, x: &[f64]) -> Vec<[f64; 2]> {
-    let tangential = problem.dim() - 1;
+/// Tangential velocities w_τ at the contact nodes in tangent coordinates, node-major, read
+/// from x (zero for a held coordinate).
+pub fn tangential_velocities(problem: &Problem, x: &[f64]) -> Vec<f64> {
     problem
         .contact
         .iter()
-        .map(|node| {
-            let mut w = [0.0; 2];
-            for k in 0..tangential {
-                // usize::MAX: a coordinate held at zero by a symmetry plane.
-                w[k] = x.get(node.tangent_dofs[k]).copied().unwrap_or(0.0);
-            }
-            w
-        })
+        .flat_map(|node| node.tangent_dofs.iter().map(|dof| dof.map_or(0.0, |r| x[r])))
         .collect()
 }
 
 /// |v| of a tangent-coordinate vector.
-pub fn norm2(v: &[f64; 2]) -> f64 {
-    v[0].hypot(v[1])
+pub fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }

@@ -103,7 +103,7 @@ impl Manufactured {
         let mut neumann = b.neumann.clone();
         neumann.sort();
         // (key, holds, the scenario's value, what the family needs)
-        let checks: [(&str, bool, String, &str); 7] = [
+        let checks: [(&str, bool, String, &str); 6] = [
             (
                 "geometry.lengths",
                 scenario.dim() == 2,
@@ -127,12 +127,6 @@ impl Manufactured {
                 b.contact == strings(&["bottom"]),
                 format!("{:?}", b.contact),
                 "[\"bottom\"]",
-            ),
-            (
-                "boundary.contact_normal",
-                b.contact_normal == [0.0, -1.0],
-                format!("{:?}", b.contact_normal),
-                "[0.0, -1.0]",
             ),
             (
                 "initial",
@@ -258,10 +252,9 @@ impl Manufactured {
         m.density * m.heat_capacity * k.theta_rate - m.conductivity * k.theta.laplacian() - m.expansion * div_w
     }
 
-    /// w_τ on Γ_C at x and t (tangent τ of the problem).
-    fn slip_rate(&self, problem: &Problem, k: &Kinematics) -> f64 {
-        let tangent = problem.tangents[0];
-        tangent[0] * k.w[0].value + tangent[1] * k.w[1].value
+    /// w_τ on Γ_C at x and t (tangent τ of the bottom face).
+    fn slip_rate(&self, _problem: &Problem, k: &Kinematics) -> f64 {
+        CONTACT_TANGENT[0] * k.w[0].value + CONTACT_TANGENT[1] * k.w[1].value
     }
 
     /// ξ*, the exact friction stress on Γ_C: −μ(|w_τ|)S sgn w_τ in slip, and in stick a value
@@ -278,9 +271,8 @@ impl Manufactured {
     /// f_C = σν − ξ* τ on Γ_C: the known load that makes the exact traction obey the law.
     pub fn contact_load(&self, problem: &Problem, x: [f64; 3], t: f64) -> [f64; 2] {
         let k = self.kinematics(x[0], x[1], t);
-        let normal = &problem.scenario.boundary.contact_normal;
-        let tangent = problem.tangents[0];
-        let traction = apply(&self.stress(problem, &k), [normal[0], normal[1]]);
+        let (normal, tangent) = (CONTACT_NORMAL, CONTACT_TANGENT);
+        let traction = apply(&self.stress(problem, &k), normal);
         let xi = self.friction_stress(problem, x[0], self.slip_rate(problem, &k), t);
         [traction[0] - xi * tangent[0], traction[1] - xi * tangent[1]]
     }
@@ -288,11 +280,16 @@ impl Manufactured {
     /// g_C = K∇θ·ν + ∂j(θ) − h_τ(t, |w_τ|) on Γ_C: the known heat flux that makes (9) exact.
     pub fn contact_heat_flux(&self, problem: &Problem, x: [f64; 3], t: f64) -> f64 {
         let k = self.kinematics(x[0], x[1], t);
-        let normal = &problem.scenario.boundary.contact_normal;
+        let normal = CONTACT_NORMAL;
         let flux = problem.material.conductivity * (k.theta.grad[0] * normal[0] + k.theta.grad[1] * normal[1]);
         flux + problem.exchange.derivative(k.theta.value) - problem.heating.heat(t, self.slip_rate(problem, &k).abs())
     }
 }
+
+/// The frame of the family's Γ_C, the bottom face y = 0: outward normal ν = (0, −1) and the
+/// tangent the contact frames give it (ν turned by +90°, [`crate::contact::frames`]).
+const CONTACT_NORMAL: [f64; 2] = [0.0, -1.0];
+const CONTACT_TANGENT: [f64; 2] = [1.0, 0.0];
 
 fn apply(sigma: &[[f64; 2]; 2], nu: [f64; 2]) -> [f64; 2] {
     [
@@ -445,9 +442,13 @@ mod tests {
 
     #[test]
     fn other_layouts_are_rejected_by_name() {
-        let s = Manufactured::scenario(&["boundary.contact_normal=[0.0, 1.0]".into()]).unwrap();
+        let s = Manufactured::scenario(&[
+            "boundary.contact=[\"bottom\", \"top\"]".into(),
+            "boundary.neumann=[\"right\"]".into(),
+        ])
+        .unwrap();
         let err = Manufactured::new(&s).unwrap_err().to_string();
-        assert!(err.contains("boundary.contact_normal"), "{err}");
+        assert!(err.contains("boundary.neumann"), "{err}");
         let s = Manufactured::scenario(&["initial.temperature=25.0".into()]).unwrap();
         assert!(Manufactured::new(&s).is_err());
     }
