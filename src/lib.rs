@@ -36,6 +36,7 @@
 //! ## Module map
 //!
 //! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
+//! [`loads`] (data as constants, affine in t or expressions of x, y, z, t; P1 load vectors),
 //! [`contact`] (laws) → [`problem`] (a scenario made discrete) → [`solver`] (step system and
 //! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
 //! the input, [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
@@ -46,6 +47,7 @@ pub mod contact;
 pub mod driver;
 pub mod error;
 pub mod fem;
+pub mod loads;
 pub mod material;
 pub mod mesh;
 pub mod norms;
