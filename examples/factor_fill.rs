@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
     let scenario = Scenario::load(file.as_deref(), &overrides)?;
 
     let clock = Instant::now();
-    let problem = Problem::new(&scenario)?;
+    let problem = scenario.build()?;
     let assembly = clock.elapsed().as_secs_f64();
     let (col_ptr, row_idx) = lower_pattern(&problem);
     let n = problem.n_unknowns();

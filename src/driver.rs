@@ -1,8 +1,9 @@
-//! A whole run, as the `run` command does it: make the problem discrete, factor, step through
-//! time, write the results, and account for the time spent.
+//! A whole run, as the `run` command does it: factor, step through time, write the results,
+//! and account for the time spent. The problem comes built ([`crate::problem::ProblemBuilder`]);
+//! the time loop is [`time::march`], observed here for output, progress and timings.
 //!
 //! ```text
-//! assemble (Problem::new) → factor (StepSystem::new) → set the solver up → N steps → outputs
+//! factor (StepSystem::new) → set the solver up → N steps (time::march) → outputs
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -14,9 +15,9 @@ use serde::Serialize;
 use crate::error::Error;
 use crate::output::{self, fields, Field, Grid, PvdEntry};
 use crate::problem::Problem;
-use crate::scenario::Scenario;
 use crate::solver::system::{State, StepSystem};
-use crate::time::{contact_rows, ContactRow, StepSolver};
+use crate::solver::{SolverParams, StepInfo};
+use crate::time::{self, contact_rows, ContactRow, StepSolver};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -25,6 +26,33 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// Draw a progress bar on stderr.
     pub progress: bool,
+}
+
+/// What a run records, and when.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputPlan {
+    /// Time levels n at which to record the contact state and write files.
+    pub steps: Vec<usize>,
+    /// Write a `.vtu` per output time and a `.pvd` collection.
+    pub vtk: bool,
+    /// Write a contact CSV per output time.
+    pub csv: bool,
+    /// A contact node slips when |w_τ| exceeds this [m/s].
+    pub slip_tolerance: f64,
+    /// The run's input as text, saved beside the results as `scenario.toml`.
+    pub record: Option<String>,
+}
+
+impl Default for OutputPlan {
+    fn default() -> Self {
+        OutputPlan {
+            steps: Vec::new(),
+            vtk: true,
+            csv: true,
+            slip_tolerance: 1e-6,
+            record: None,
+        }
+    }
 }
 
 /// Wall time per phase, in seconds.
@@ -106,42 +134,49 @@ pub struct Summary {
     pub outputs: Vec<OutputRecord>,
 }
 
-/// Runs a scenario end to end.
-pub fn run(scenario: &Scenario, options: &RunOptions) -> Result<Summary, Error> {
-    run_observed(scenario, options, |_, _, _| ()).map(|run| run.summary)
+/// Runs a problem end to end.
+pub fn run(
+    problem: &Problem,
+    params: &SolverParams,
+    plan: &OutputPlan,
+    options: &RunOptions,
+) -> Result<Summary, Error> {
+    run_observed(problem, params, plan, options, |_, _, _| ()).map(|run| run.summary)
 }
 
 /// Runs without writing files or drawing progress (tests and studies); also returns the state
 /// at T.
-pub fn run_quiet(scenario: &Scenario) -> Result<(Summary, State), Error> {
-    run_observed(scenario, &RunOptions::default(), |_, _, _| ()).map(|run| (run.summary, run.state))
+pub fn run_quiet(problem: &Problem, params: &SolverParams, plan: &OutputPlan) -> Result<(Summary, State), Error> {
+    run_observed(problem, params, plan, &RunOptions::default(), |_, _, _| ()).map(|run| (run.summary, run.state))
 }
 
-/// A finished run: its summary, the state at T and the discrete problem.
+/// A finished run: its summary and the state at T.
 pub struct Run {
     pub summary: Summary,
     pub state: State,
-    pub problem: Problem,
 }
 
 /// [`run`], with `observer` called on every new state (with the step's solver figures), and
-/// returning the problem and the state at T too.
+/// returning the state at T too.
 pub fn run_observed(
-    scenario: &Scenario,
+    problem: &Problem,
+    params: &SolverParams,
+    plan: &OutputPlan,
     options: &RunOptions,
-    mut observer: impl FnMut(&Problem, &State, &crate::solver::StepInfo),
+    mut observer: impl FnMut(&Problem, &State, &StepInfo),
 ) -> Result<Run, Error> {
     let start = Instant::now();
-    let mut timings = Timings::default();
-    let problem = Problem::new(scenario)?;
-    timings.assembly = start.elapsed().as_secs_f64();
+    let mut timings = Timings {
+        assembly: problem.build_seconds,
+        ..Timings::default()
+    };
 
     let clock = Instant::now();
-    let system = StepSystem::new(&problem)?;
+    let system = StepSystem::new(problem)?;
     timings.factorization = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let solver = StepSolver::new(&problem, &system);
+    let solver = StepSolver::new(problem, &system, params);
     timings.solver_setup = clock.elapsed().as_secs_f64();
     let setup_stats = system.stats();
 
@@ -150,15 +185,17 @@ pub fn run_observed(
             path: dir.clone(),
             source,
         })?;
-        output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml().as_bytes()).map_err(|source| {
-            output::OutputError::Io {
-                path: dir.join("scenario.toml"),
-                source,
-            }
-        })?;
+        if let Some(record) = &plan.record {
+            output::write_atomic(&dir.join("scenario.toml"), record.as_bytes()).map_err(|source| {
+                output::OutputError::Io {
+                    path: dir.join("scenario.toml"),
+                    source,
+                }
+            })?;
+        }
     }
 
-    let n_steps = scenario.time.steps;
+    let n_steps = problem.time.steps;
     let bar = if options.progress {
         ProgressBar::new(n_steps as u64)
     } else {
@@ -169,39 +206,36 @@ pub fn run_observed(
             .expect("valid template")
             .progress_chars("=> "),
     );
-    let output_steps = scenario.output_steps();
-    let slip_tolerance = scenario.solver.slip_tolerance;
     let mut outputs = Vec::new();
     let mut pvd = Vec::new();
     let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
     let (mut newton_total, mut fallbacks) = (0, 0);
     let mut output_time = 0.0;
-    let mut state = State::initial(&problem);
     let loop_clock = Instant::now();
-    for _ in 0..n_steps {
-        let (next, info) = solver.step(&state).inspect_err(|_| bar.abandon())?;
-        state = next;
-        observer(&problem, &state, &info);
+    let state = time::march(problem, &solver, |state, info| {
+        observer(problem, state, info);
         outer_total += info.convexification_iterations;
         inner_total += info.inner_iterations;
         outer_max = outer_max.max(info.convexification_iterations);
         newton_total += info.newton_iterations;
         fallbacks += usize::from(info.fallback);
         bar.inc(1);
-        if output_steps.contains(&state.n) {
+        if plan.steps.contains(&state.n) {
             let clock = Instant::now();
-            let record = record(&problem, &state, slip_tolerance);
+            let record = record(problem, state, plan.slip_tolerance);
             bar.set_message(format!(
                 "t = {:.3}: {} slip, {} stick",
                 record.t, record.slip_nodes, record.stick_nodes
             ));
             if let Some(dir) = &options.out_dir {
-                write_snapshot(&problem, &state, &record, dir, &mut pvd)?;
+                write_snapshot(problem, plan, state, &record, dir, &mut pvd)?;
             }
             outputs.push(record);
             output_time += clock.elapsed().as_secs_f64();
         }
-    }
+        Ok(())
+    })
+    .inspect_err(|_| bar.abandon())?;
     bar.finish_and_clear();
     timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
     let loop_stats = system.stats();
@@ -220,8 +254,8 @@ pub fn run_observed(
         contact_nodes: problem.contact.len(),
         steps: n_steps,
         time_step: problem.time_step(),
-        solver: format!("{:?}", scenario.solver.kind).to_lowercase(),
-        slip_tolerance,
+        solver: params.kind.name().to_string(),
+        slip_tolerance: plan.slip_tolerance,
         convexification_iterations: outer_total,
         inner_iterations: inner_total,
         max_convexification_per_step: outer_max,
@@ -235,11 +269,11 @@ pub fn run_observed(
     };
     if let Some(dir) = &options.out_dir {
         let clock = Instant::now();
-        if scenario.output.vtk {
+        if plan.vtk {
             output::write_pvd(&dir.join("solution.pvd"), &pvd)?;
         }
         summary.timings.output = output_time + clock.elapsed().as_secs_f64();
-        summary.timings.total = start.elapsed().as_secs_f64();
+        summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
         let json = serde_json::to_vec_pretty(&summary).expect("a summary serializes");
         output::write_atomic(&dir.join("summary.json"), &json).map_err(|source| output::OutputError::Io {
             path: dir.join("summary.json"),
@@ -247,15 +281,11 @@ pub fn run_observed(
         })?;
     } else {
         summary.timings.output = output_time;
-        summary.timings.total = start.elapsed().as_secs_f64();
+        summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
     }
     drop(solver);
     drop(system);
-    Ok(Run {
-        summary,
-        state,
-        problem,
-    })
+    Ok(Run { summary, state })
 }
 
 /// The figures of one output time.
@@ -282,24 +312,31 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
     }
 }
 
-/// Header of the contact CSV files.
+/// Header of the contact CSV files: position, outward normal ν, (3D: the first tangent t₁; in
+/// 2D t = ν turned by +90°), w_τ and ξ in the node's tangent coordinates, the friction bound,
+/// slip (1) or stick (0), θ.
 pub fn contact_csv_header(dim: usize) -> Vec<&'static str> {
     if dim == 2 {
-        vec!["x", "y", "w_tau", "xi", "bound", "slip", "theta"]
+        vec!["x", "y", "nu_x", "nu_y", "w_tau", "xi", "bound", "slip", "theta"]
     } else {
         vec![
-            "x", "y", "z", "w_tau1", "w_tau2", "xi1", "xi2", "bound", "slip", "theta",
+            "x", "y", "z", "nu_x", "nu_y", "nu_z", "t1_x", "t1_y", "t1_z", "w_tau1", "w_tau2", "xi1", "xi2", "bound",
+            "slip", "theta",
         ]
     }
 }
 
-/// The contact CSV rows: position, w_τ, ξ, friction bound, slip (1) or stick (0), θ.
+/// The contact CSV rows, in the columns of [`contact_csv_header`].
 pub fn contact_csv_rows(dim: usize, rows: &[ContactRow]) -> Vec<Vec<f64>> {
     rows.iter()
         .map(|r| {
             let mut v: Vec<f64> = r.x[..dim].to_vec();
-            v.extend_from_slice(&r.w_tau[..dim - 1]);
-            v.extend_from_slice(&r.xi[..dim - 1]);
+            v.extend_from_slice(&r.normal[..dim]);
+            if dim == 3 {
+                v.extend_from_slice(&r.tangents[0]);
+            }
+            v.extend_from_slice(&r.w_tau);
+            v.extend_from_slice(&r.xi);
             v.extend([r.bound, if r.slip { 1.0 } else { 0.0 }, r.theta]);
             v
         })
@@ -308,18 +345,18 @@ pub fn contact_csv_rows(dim: usize, rows: &[ContactRow]) -> Vec<Vec<f64>> {
 
 fn write_snapshot(
     problem: &Problem,
+    plan: &OutputPlan,
     state: &State,
     record: &OutputRecord,
     dir: &Path,
     pvd: &mut Vec<PvdEntry>,
 ) -> Result<(), Error> {
-    let scenario = &problem.scenario;
     let d = problem.dim();
-    if scenario.output.csv {
+    if plan.csv {
         let path = dir.join(format!("contact_{:04}.csv", state.n));
         output::write_csv(&path, &contact_csv_header(d), &contact_csv_rows(d, &record.contact))?;
     }
-    if scenario.output.vtk {
+    if plan.vtk {
         let file = format!("solution_{:04}.vtu", state.n);
         let stress = fields::cell_stress(problem, state);
         let (status, friction) = fields::nodal_contact_fields(problem, &record.contact);

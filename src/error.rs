@@ -15,6 +15,41 @@ pub enum Error {
         value: String,
         expected: String,
     },
+    /// A boundary part the mesh does not have.
+    #[error("the mesh has no boundary part `{name}` (named for {role}); its parts are {known:?}")]
+    UnknownPart {
+        role: String,
+        name: String,
+        known: Vec<String>,
+    },
+    /// A traction or pressure on a part that is not a Neumann part.
+    #[error("`{label}` acts on `{part}`, which is not a Neumann part (those are {neumann:?})")]
+    LoadOffNeumann {
+        label: String,
+        part: String,
+        neumann: Vec<String>,
+    },
+    /// Initial data outside E^h: not zero on Γ_D, a normal component on Γ_C, or across a
+    /// symmetry plane.
+    #[error(
+        "`{label}` is not admissible at node {node} (x = {x:?}): {value:?} must vanish on Γ_D and have no \
+         normal component on Γ_C or across a symmetry plane"
+    )]
+    InitialNotAdmissible {
+        label: String,
+        node: usize,
+        x: [f64; 3],
+        value: Vec<f64>,
+    },
+    /// A symmetry part that is not flat.
+    #[error("the symmetry part `{part}` is not flat (a symmetry plane needs one normal)")]
+    CurvedSymmetryPart { part: String },
+    /// A mesh that cannot be read or is not valid.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    /// A load that cannot be built or evaluated.
+    #[error(transparent)]
+    Load(#[from] crate::loads::LoadError),
     /// A scenario that does not parse.
     #[error("scenario: {0}")]
     Scenario(String),

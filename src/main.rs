@@ -45,13 +45,10 @@ struct ScenarioArgs {
 
 impl ScenarioArgs {
     fn load(&self) -> anyhow::Result<Scenario> {
-        let text = match &self.scenario {
-            Some(path) => Some(
-                std::fs::read_to_string(path).with_context(|| format!("cannot read scenario {}", path.display()))?,
-            ),
-            None => None,
+        let scenario = match &self.scenario {
+            Some(path) => Scenario::load_file(path, &self.overrides)?,
+            None => Scenario::load(None, &self.overrides)?,
         };
-        let scenario = Scenario::load(text.as_deref(), &self.overrides)?;
         Ok(scenario)
     }
 }
@@ -218,11 +215,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Run { scenario, out, quiet } => {
             let scenario = scenario.load()?;
             print_setup(&scenario);
+            let problem = scenario.build()?;
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,
             };
-            let summary = driver::run(&scenario, &options)?;
+            let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)?;
             print_summary(&summary);
             println!(
                 "results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
@@ -364,7 +362,7 @@ fn converge(scenario: ScenarioArgs, n_levels: usize, study: Study, out: PathBuf)
     if study != Study::Manufactured {
         println!(
             "thermocontact converge: Ω = {:?} m, T = {} s, solver {:?}, θ_D = {} °C, α_exp = {:e}; each level replaces the scenario's mesh and time step",
-            base.geometry.lengths,
+            base.structured().map(|s| s.lengths).unwrap_or_default(),
             base.time.final_time,
             base.solver.kind,
             base.boundary.temperature,
@@ -426,13 +424,16 @@ fn print_figures(made: &FiguresMade) {
 }
 
 fn print_setup(s: &Scenario) {
-    let mesh = match s.mesh.nz {
-        Some(nz) => format!("{} × {} × {}", s.mesh.nx, s.mesh.ny, nz),
-        None => format!("{} × {}", s.mesh.nx, s.mesh.ny),
+    let mesh = match (s.structured(), &s.mesh.file) {
+        (Some(g), _) => {
+            let cells: Vec<String> = g.cells.iter().map(usize::to_string).collect();
+            format!("Ω = {:?} m, mesh {} cells", g.lengths, cells.join(" × "))
+        }
+        (None, Some(file)) => format!("mesh {} ({}D)", file.display(), s.dim()),
+        (None, None) => "no mesh".to_string(),
     };
     println!(
-        "thermocontact: Ω = {:?} m, mesh {mesh} cells, T = {} s in {} steps (k = {:.6}), solver {:?}, θ_D = {} °C, α_exp = {:e}",
-        s.geometry.lengths,
+        "thermocontact: {mesh}, T = {} s in {} steps (k = {:.6}), solver {:?}, θ_D = {} °C, α_exp = {:e}",
         s.time.final_time,
         s.time.steps,
         s.time_step(),

@@ -5,10 +5,21 @@
 //! overrides are applied, then the result is checked: unknown keys, wrong types and invalid
 //! values are errors that name the dotted key, the value and what was expected.
 
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
 use serde::{Deserialize, Serialize};
 use toml::{Table, Value};
 
+use crate::contact::{LinearHeating, QuadraticExchange, SlipWeakening, Tresca};
+use crate::driver::{OutputPlan, Summary};
 use crate::error::Error;
+use crate::loads::{Datum, Expression};
+use crate::material::{Isotropic, Material};
+use crate::mesh::{self, Mesh};
+use crate::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use crate::solver::system::State;
+use crate::solver::{SolverKind, SolverParams};
 
 /// The default scenario (the paper's example), with comments.
 pub const DEFAULT_TOML: &str = include_str!("../scenarios/paper.toml");
@@ -17,7 +28,9 @@ pub const DEFAULT_TOML: &str = include_str!("../scenarios/paper.toml");
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
-    pub geometry: Geometry,
+    /// The box of the structured generator; absent when the mesh comes from a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<Geometry>,
     pub mesh: MeshSpec,
     pub time: TimeSpec,
     pub boundary: BoundarySpec,
@@ -29,6 +42,9 @@ pub struct Scenario {
     pub frictional_heating: Affine<f64>,
     pub solver: SolverSpec,
     pub output: OutputSpec,
+    /// The mesh read from `mesh.file`, kept from validation to the build.
+    #[serde(skip)]
+    loaded: LoadedMesh,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -38,13 +54,49 @@ pub struct Geometry {
     pub lengths: Vec<f64>,
 }
 
+/// The mesh: a Gmsh file, or cell counts for the structured generator over `geometry`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSpec {
-    pub nx: usize,
-    pub ny: usize,
+    /// A Gmsh `.msh` file (a path relative to the scenario file; stored resolved).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nx: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ny: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub nz: Option<usize>,
+}
+
+/// A structured mesh: the box and its cell counts (2 or 3 of each).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Structured {
+    pub lengths: Vec<f64>,
+    pub cells: Vec<usize>,
+}
+
+impl Structured {
+    /// Cells along x.
+    pub fn nx(&self) -> usize {
+        self.cells[0]
+    }
+
+    /// Cells along y.
+    pub fn ny(&self) -> usize {
+        self.cells[1]
+    }
+}
+
+/// A mesh read once from a file and shared by the clones of a scenario; equal to any other (the
+/// file name is what identifies a scenario).
+#[derive(Debug, Clone, Default)]
+struct LoadedMesh(Option<Arc<Mesh>>);
+
+impl PartialEq for LoadedMesh {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -57,6 +109,7 @@ pub struct TimeSpec {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BoundarySpec {
+    /// Γ_D (may be empty: a body held by friction alone).
     pub dirichlet: Vec<String>,
     pub neumann: Vec<String>,
     pub contact: Vec<String>,
@@ -81,12 +134,13 @@ pub struct MaterialSpec {
     pub conductivity: f64,
 }
 
+/// The initial data (10), each a datum at t = 0 (numbers or expressions of x, y, z).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
-    pub displacement: Vec<f64>,
-    pub velocity: Vec<f64>,
-    pub temperature: f64,
+    pub displacement: DatumSpec,
+    pub velocity: DatumSpec,
+    pub temperature: DatumSpec,
 }
 
 /// A datum affine in time: value(t) = constant + rate · t.
@@ -104,28 +158,222 @@ impl Affine<f64> {
     }
 }
 
-impl Affine<Vec<f64>> {
-    /// The value at time t.
-    pub fn at(&self, t: f64) -> Vec<f64> {
-        self.constant.iter().zip(&self.rate).map(|(c, r)| c + r * t).collect()
+/// A datum as a scenario writes it: a number or an array of numbers (constant), a
+/// `{ constant, rate }` table (affine in t), or a string or an array of strings (expressions in
+/// x, y, z, t).
+#[derive(Debug, Clone, PartialEq)]
+pub enum DatumSpec {
+    Numbers(Vec<f64>),
+    Affine(Affine<Vec<f64>>),
+    Expressions(Vec<String>),
+    /// A single number or string, written without brackets.
+    Scalar(Box<DatumSpec>),
+}
+
+const DATUM_FORMS: &str = "a number or an array of numbers, a { constant, rate } table, or an expression \
+     string (or an array of them) in x, y, z, t";
+
+impl<'de> Deserialize<'de> for DatumSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let value = Value::deserialize(deserializer)?;
+        let number = |v: &Value| match v {
+            Value::Float(x) => Some(*x),
+            Value::Integer(i) => Some(*i as f64),
+            _ => None,
+        };
+        let numbers = |v: &Value| match v {
+            Value::Array(items) => items.iter().map(number).collect::<Option<Vec<f64>>>(),
+            v => number(v).map(|x| vec![x]),
+        };
+        let spec = match &value {
+            Value::Float(_) | Value::Integer(_) => {
+                DatumSpec::Scalar(Box::new(DatumSpec::Numbers(numbers(&value).unwrap_or_default())))
+            }
+            Value::String(text) => DatumSpec::Scalar(Box::new(DatumSpec::Expressions(vec![text.clone()]))),
+            Value::Array(items) if items.iter().all(|v| number(v).is_some()) => {
+                DatumSpec::Numbers(numbers(&value).unwrap_or_default())
+            }
+            Value::Array(items) if items.iter().all(Value::is_str) => {
+                DatumSpec::Expressions(items.iter().filter_map(|v| v.as_str().map(String::from)).collect())
+            }
+            Value::Table(table) if table.len() == 2 && table.contains_key("constant") && table.contains_key("rate") => {
+                match (numbers(&table["constant"]), numbers(&table["rate"])) {
+                    (Some(constant), Some(rate)) if constant.len() == rate.len() => {
+                        let affine = DatumSpec::Affine(Affine { constant, rate });
+                        if table["constant"].is_array() {
+                            affine
+                        } else {
+                            DatumSpec::Scalar(Box::new(affine))
+                        }
+                    }
+                    _ => {
+                        return Err(D::Error::custom(
+                            "constant and rate must be numbers (or arrays of equal length)",
+                        ))
+                    }
+                }
+            }
+            _ => return Err(D::Error::custom(format!("expected {DATUM_FORMS}"))),
+        };
+        Ok(spec)
     }
 }
 
+impl Serialize for DatumSpec {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            DatumSpec::Numbers(v) => v.serialize(serializer),
+            DatumSpec::Expressions(v) => v.serialize(serializer),
+            DatumSpec::Affine(a) => a.serialize(serializer),
+            DatumSpec::Scalar(inner) => match inner.as_ref() {
+                DatumSpec::Numbers(v) if v.len() == 1 => v[0].serialize(serializer),
+                DatumSpec::Expressions(v) if v.len() == 1 => v[0].serialize(serializer),
+                DatumSpec::Affine(a) if a.constant.len() == 1 => Affine {
+                    constant: a.constant[0],
+                    rate: a.rate[0],
+                }
+                .serialize(serializer),
+                other => other.serialize(serializer),
+            },
+        }
+    }
+}
+
+impl DatumSpec {
+    /// A constant datum.
+    pub fn numbers(values: &[f64]) -> Self {
+        DatumSpec::Numbers(values.to_vec())
+    }
+
+    /// A constant scalar, written without brackets.
+    pub fn scalar(value: f64) -> Self {
+        DatumSpec::Scalar(Box::new(DatumSpec::Numbers(vec![value])))
+    }
+
+    /// The values of a constant datum (`None` for affine data and expressions).
+    pub fn constant(&self) -> Option<&[f64]> {
+        match self {
+            DatumSpec::Numbers(v) => Some(v),
+            DatumSpec::Scalar(inner) => inner.constant(),
+            _ => None,
+        }
+    }
+
+    /// The value of a constant scalar datum.
+    pub fn as_scalar(&self) -> Option<f64> {
+        self.constant().filter(|v| v.len() == 1).map(|v| v[0])
+    }
+
+    /// The datum of the core, with `n` components, its expressions compiled; errors name `key`.
+    pub fn to_datum(&self, key: &str, n: usize) -> Result<Datum, Error> {
+        let expected = || {
+            if n == 1 {
+                "one component (a scalar)".to_string()
+            } else {
+                format!("{n} components (one per space dimension)")
+            }
+        };
+        let count = |len: usize| {
+            if len == n {
+                Ok(())
+            } else {
+                Err(invalid(key, &self.to_string(), &expected()))
+            }
+        };
+        let finite = |values: &[f64]| {
+            if values.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(invalid(key, &self.to_string(), "finite numbers"))
+            }
+        };
+        match self {
+            DatumSpec::Scalar(inner) => inner.to_datum(key, n),
+            DatumSpec::Numbers(values) => {
+                count(values.len())?;
+                finite(values)?;
+                Ok(Datum::Constant(values.clone()))
+            }
+            DatumSpec::Affine(Affine { constant, rate }) => {
+                count(constant.len())?;
+                finite(constant)?;
+                finite(rate)?;
+                Ok(Datum::affine(constant.clone(), rate.clone()))
+            }
+            DatumSpec::Expressions(texts) => {
+                count(texts.len())?;
+                let compiled = texts
+                    .iter()
+                    .map(|text| {
+                        Expression::parse(text).map_err(|e| Error::InvalidValue {
+                            key: key.to_string(),
+                            value: format!("{text:?}"),
+                            expected: e.to_string(),
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(Datum::Expressions(compiled))
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for DatumSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let text = toml::Value::try_from(self).map(|v| v.to_string()).unwrap_or_default();
+        f.write_str(&text)
+    }
+}
+
+/// A traction f₂ on a Neumann part: `value` (any datum form), or the affine `constant` + `rate`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Traction {
     pub part: String,
-    pub constant: Vec<f64>,
-    pub rate: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<DatumSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constant: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate: Option<Vec<f64>>,
+}
+
+impl Traction {
+    /// The traction as one datum form; errors name `key`.
+    fn datum_spec(&self, key: &str) -> Result<DatumSpec, Error> {
+        match (&self.value, &self.constant, &self.rate) {
+            (Some(value), None, None) => Ok(value.clone()),
+            (None, Some(constant), Some(rate)) => Ok(DatumSpec::Affine(Affine {
+                constant: constant.clone(),
+                rate: rate.clone(),
+            })),
+            _ => Err(invalid(
+                key,
+                &format!("{self:?}"),
+                "either `value` or both `constant` and `rate`",
+            )),
+        }
+    }
+}
+
+/// A normal pressure p on a Neumann part: the traction −p ν.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Pressure {
+    pub part: String,
+    pub value: DatumSpec,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Loads {
-    pub body_force: Affine<Vec<f64>>,
-    pub heat_source: Affine<f64>,
+    pub body_force: DatumSpec,
+    pub heat_source: DatumSpec,
     #[serde(default)]
     pub traction: Vec<Traction>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressure: Vec<Pressure>,
 }
 
 /// The friction law on Γ_C.
@@ -143,16 +391,6 @@ pub enum FrictionSpec {
 pub struct HeatExchangeSpec {
     pub coefficient: f64,
     pub foundation_temperature: f64,
-}
-
-/// Which nonsmooth solver runs each time step.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum SolverKind {
-    /// Convexification loop + Uzawa augmented Lagrangian (Problem 17).
-    Paper,
-    /// Semismooth Newton on the condensed nonmonotone law, the paper's solver as fallback.
-    Fast,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -182,20 +420,41 @@ impl Default for Scenario {
 
 impl Scenario {
     /// Loads a scenario: the built-in default, overlaid by the file's text (if any), overlaid by
-    /// `key.path=value` overrides; then validated.
+    /// `key.path=value` overrides; then validated. A relative `mesh.file` is taken relative to
+    /// the current directory.
     pub fn load(file_text: Option<&str>, overrides: &[String]) -> Result<Self, Error> {
+        Self::load_in(file_text, overrides, None)
+    }
+
+    /// [`Scenario::load`] from a file: a relative `mesh.file` in it is taken relative to the
+    /// file's folder.
+    pub fn load_file(path: &Path, overrides: &[String]) -> Result<Self, Error> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::load_in(Some(&text), overrides, path.parent())
+    }
+
+    fn load_in(file_text: Option<&str>, overrides: &[String], folder: Option<&Path>) -> Result<Self, Error> {
         let mut table: Table = DEFAULT_TOML.parse().expect("built-in scenario parses");
         if let Some(text) = file_text {
-            let user: Table = text
+            let mut user: Table = text
                 .parse()
                 .map_err(|e: toml::de::Error| Error::Scenario(format!("the file is not valid TOML: {e}")))?;
+            resolve_mesh_file(&mut user, folder);
             overlay(&mut table, user, "")?;
         }
         for assignment in overrides {
             apply_override(&mut table, assignment)?;
         }
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
-        let scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        if let Some(file) = &mut scenario.mesh.file {
+            *file = std::path::absolute(&*file).unwrap_or_else(|_| file.clone());
+            let mesh = mesh::read_msh(file).map_err(Error::Mesh)?;
+            scenario.loaded = LoadedMesh(Some(Arc::new(mesh)));
+        }
         scenario.validate()?;
         Ok(scenario)
     }
@@ -205,9 +464,49 @@ impl Scenario {
         toml::to_string(self).expect("a scenario serializes")
     }
 
-    /// Space dimension d (2 for a rectangle, 3 for a box).
+    /// The structured mesh's box and cell counts; `None` for a mesh from a file.
+    pub fn structured(&self) -> Option<Structured> {
+        let lengths = self.geometry.as_ref()?.lengths.clone();
+        let mut cells = vec![self.mesh.nx?, self.mesh.ny?];
+        cells.extend(self.mesh.nz);
+        Some(Structured { lengths, cells })
+    }
+
+    /// Sets the structured mesh's cell counts (nz only for a box).
+    pub fn set_cells(&mut self, nx: usize, ny: usize) {
+        self.mesh.nx = Some(nx);
+        self.mesh.ny = Some(ny);
+    }
+
+    /// The mesh: read from `mesh.file` (once, when the scenario was loaded) or generated.
+    pub fn mesh(&self) -> Result<Mesh, Error> {
+        if let Some(mesh) = &self.loaded.0 {
+            return Ok(mesh.as_ref().clone());
+        }
+        if let Some(file) = &self.mesh.file {
+            return mesh::read_msh(file).map_err(Error::Mesh);
+        }
+        let s = self.structured().ok_or_else(|| {
+            invalid(
+                "mesh",
+                &"(no file, no cell counts)",
+                "`file` or the cell counts nx, ny (and nz) with geometry.lengths",
+            )
+        })?;
+        Ok(match s.cells.as_slice() {
+            [nx, ny] => mesh::rectangle(s.lengths[0], s.lengths[1], *nx, *ny),
+            [nx, ny, nz] => mesh::cuboid([s.lengths[0], s.lengths[1], s.lengths[2]], [*nx, *ny, *nz]),
+            _ => unreachable!("validated: 2 or 3 cell counts"),
+        })
+    }
+
+    /// Space dimension d (2 for a rectangle or a 2D mesh, 3 for a box or a 3D mesh).
     pub fn dim(&self) -> usize {
-        self.geometry.lengths.len()
+        match (&self.loaded.0, &self.geometry) {
+            (Some(mesh), _) => mesh.dim,
+            (None, Some(g)) => g.lengths.len(),
+            (None, None) => 0,
+        }
     }
 
     /// Time step k = T/N.
@@ -215,41 +514,25 @@ impl Scenario {
         self.time.final_time / self.time.steps as f64
     }
 
+    /// The names of the mesh's boundary parts.
+    fn part_names(&self) -> Vec<String> {
+        match (&self.loaded.0, self.dim()) {
+            (Some(mesh), _) => mesh.part_names.clone(),
+            (None, 2) => mesh::rectangle_part_names().map(String::from).to_vec(),
+            (None, _) => mesh::cuboid_part_names().map(String::from).to_vec(),
+        }
+    }
+
     /// Checks every value against its admissible range.
     pub fn validate(&self) -> Result<(), Error> {
-        let d = self.geometry.lengths.len();
-        if d != 2 && d != 3 {
-            return Err(invalid(
-                "geometry.lengths",
-                &self.geometry.lengths,
-                "2 lengths (rectangle) or 3 (box)",
-            ));
+        if self.mesh.file.is_none() {
+            self.validate_structured()?;
         }
-        for &l in &self.geometry.lengths {
-            positive("geometry.lengths", l)?;
-        }
-        at_least_one("mesh.nx", self.mesh.nx)?;
-        at_least_one("mesh.ny", self.mesh.ny)?;
-        match (d, self.mesh.nz) {
-            (3, None) => {
-                return Err(invalid(
-                    "mesh.nz",
-                    &"(missing)",
-                    "a cell count for the box's z direction",
-                ))
-            }
-            (3, Some(nz)) => at_least_one("mesh.nz", nz)?,
-            (2, Some(nz)) => return Err(invalid("mesh.nz", &nz, "no nz for a rectangle (2 lengths)")),
-            _ => {}
-        }
+        let d = self.dim();
         positive("time.final_time", self.time.final_time)?;
         at_least_one("time.steps", self.time.steps)?;
 
-        let parts: &[&str] = if d == 2 {
-            &["left", "right", "bottom", "top"]
-        } else {
-            &["x-", "x+", "y-", "y+", "z-", "z+"]
-        };
+        let parts = self.part_names();
         let mut seen: Vec<&str> = Vec::new();
         for (key, list) in [
             ("boundary.dirichlet", &self.boundary.dirichlet),
@@ -258,8 +541,12 @@ impl Scenario {
             ("boundary.symmetry", &self.boundary.symmetry),
         ] {
             for name in list {
-                if !parts.contains(&name.as_str()) {
-                    return Err(invalid(key, name, &format!("boundary parts among {parts:?}")));
+                if !parts.contains(name) {
+                    return Err(invalid(
+                        key,
+                        name,
+                        &format!("boundary parts of the mesh, among {parts:?}"),
+                    ));
                 }
                 if seen.contains(&name.as_str()) {
                     return Err(invalid(
@@ -271,9 +558,6 @@ impl Scenario {
                 seen.push(name);
             }
         }
-        if self.boundary.dirichlet.is_empty() {
-            return Err(invalid("boundary.dirichlet", &"[]", "at least one part (meas Γ_D > 0)"));
-        }
         if self.boundary.contact.is_empty() {
             return Err(invalid("boundary.contact", &"[]", "at least one part for Γ_C"));
         }
@@ -282,7 +566,7 @@ impl Scenario {
         positive("material.density", m.density)?;
         positive("material.heat_capacity", m.heat_capacity)?;
         positive("material.viscosity_mu2", m.viscosity_mu2)?;
-        if m.viscosity_mu1 * d as f64 + m.viscosity_mu2 <= 0.0 {
+        if !m.viscosity_mu1.is_finite() || m.viscosity_mu1 * d as f64 + m.viscosity_mu2 <= 0.0 {
             return Err(invalid(
                 "material.viscosity_mu1",
                 &m.viscosity_mu1,
@@ -296,38 +580,29 @@ impl Scenario {
         finite("material.thermal_expansion", m.thermal_expansion)?;
         positive("material.conductivity", m.conductivity)?;
 
-        vector("initial.displacement", &self.initial.displacement, d)?;
-        vector("initial.velocity", &self.initial.velocity, d)?;
-        if self.initial.displacement.iter().any(|&v| v != 0.0) {
-            return Err(invalid(
-                "initial.displacement",
-                &self.initial.displacement,
-                "zero (a uniform u₀ must vanish on the clamped part Γ_D)",
-            ));
-        }
-        finite("initial.temperature", self.initial.temperature)?;
+        self.initial.displacement.to_datum("initial.displacement", d)?;
+        self.initial.velocity.to_datum("initial.velocity", d)?;
+        self.initial.temperature.to_datum("initial.temperature", 1)?;
         finite("boundary.temperature", self.boundary.temperature)?;
 
-        vector("loads.body_force.constant", &self.loads.body_force.constant, d)?;
-        vector("loads.body_force.rate", &self.loads.body_force.rate, d)?;
-        finite("loads.heat_source.constant", self.loads.heat_source.constant)?;
-        finite("loads.heat_source.rate", self.loads.heat_source.rate)?;
+        self.loads.body_force.to_datum("loads.body_force", d)?;
+        self.loads.heat_source.to_datum("loads.heat_source", 1)?;
         for (i, t) in self.loads.traction.iter().enumerate() {
-            if !self.boundary.neumann.contains(&t.part) {
-                return Err(invalid(
-                    &format!("loads.traction[{i}].part"),
-                    &t.part,
-                    &format!("a Neumann part, one of {:?}", self.boundary.neumann),
-                ));
-            }
-            vector(&format!("loads.traction[{i}].constant"), &t.constant, d)?;
-            vector(&format!("loads.traction[{i}].rate"), &t.rate, d)?;
+            let key = format!("loads.traction[{i}]");
+            self.neumann_part(&format!("{key}.part"), &t.part)?;
+            t.datum_spec(&key)?.to_datum(&key, d)?;
+        }
+        for (i, p) in self.loads.pressure.iter().enumerate() {
+            let key = format!("loads.pressure[{i}]");
+            self.neumann_part(&format!("{key}.part"), &p.part)?;
+            p.value.to_datum(&format!("{key}.value"), 1)?;
         }
 
         match self.friction {
             FrictionSpec::SlipWeakening { bound, a, b, alpha } => {
                 non_negative("friction.bound", bound)?;
                 positive("friction.b", b)?;
+                finite("friction.a", a)?;
                 if a < b {
                     return Err(invalid("friction.a", &a, &format!("a ≥ b = {b} (μ decreasing)")));
                 }
@@ -362,6 +637,55 @@ impl Scenario {
         Ok(())
     }
 
+    fn validate_structured(&self) -> Result<(), Error> {
+        let Some(geometry) = &self.geometry else {
+            return Err(invalid(
+                "geometry.lengths",
+                &"(missing)",
+                "the box of the structured mesh (or a mesh.file)",
+            ));
+        };
+        let d = geometry.lengths.len();
+        if d != 2 && d != 3 {
+            return Err(invalid(
+                "geometry.lengths",
+                &geometry.lengths,
+                "2 lengths (rectangle) or 3 (box)",
+            ));
+        }
+        for &l in &geometry.lengths {
+            positive("geometry.lengths", l)?;
+        }
+        for (key, count) in [("mesh.nx", self.mesh.nx), ("mesh.ny", self.mesh.ny)] {
+            match count {
+                Some(n) => at_least_one(key, n)?,
+                None => return Err(invalid(key, &"(missing)", "a cell count (or a mesh.file)")),
+            }
+        }
+        match (d, self.mesh.nz) {
+            (3, None) => Err(invalid(
+                "mesh.nz",
+                &"(missing)",
+                "a cell count for the box's z direction",
+            )),
+            (3, Some(nz)) => at_least_one("mesh.nz", nz),
+            (2, Some(nz)) => Err(invalid("mesh.nz", &nz, "no nz for a rectangle (2 lengths)")),
+            _ => Ok(()),
+        }
+    }
+
+    fn neumann_part(&self, key: &str, part: &str) -> Result<(), Error> {
+        if self.boundary.neumann.iter().any(|p| p == part) {
+            Ok(())
+        } else {
+            Err(invalid(
+                key,
+                &part,
+                &format!("a Neumann part, one of {:?}", self.boundary.neumann),
+            ))
+        }
+    }
+
     /// Time levels n (1 ≤ n ≤ N) of the output times, each rounded to the nearest level, sorted
     /// and without repeats.
     pub fn output_steps(&self) -> Vec<usize> {
@@ -375,6 +699,140 @@ impl Scenario {
         steps.sort_unstable();
         steps.dedup();
         steps
+    }
+
+    /// The material of the scenario.
+    pub fn material(&self) -> Material {
+        let m = &self.material;
+        Material {
+            density: m.density,
+            heat_capacity: m.heat_capacity,
+            viscosity: Isotropic::viscosity(m.viscosity_mu1, m.viscosity_mu2),
+            elasticity: Isotropic::elasticity(m.young, m.poisson),
+            expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
+            conductivity: m.conductivity,
+        }
+    }
+
+    /// The scenario's problem, ready for a builder's last touches (extra loads).
+    pub fn builder(&self) -> Result<ProblemBuilder, Error> {
+        let mesh = self.mesh()?;
+        let d = mesh.dim;
+        let b = &self.boundary;
+        let h = &self.heat_exchange;
+        let mut builder = ProblemBuilder::new(
+            mesh,
+            self.material(),
+            TimeGrid::new(self.time.final_time, self.time.steps),
+        )
+        .dirichlet(&names(&b.dirichlet))
+        .neumann(&names(&b.neumann))
+        .contact(&names(&b.contact))
+        .symmetry(&names(&b.symmetry))
+        .boundary_temperature(b.temperature)
+        .heat_exchange(QuadraticExchange {
+            coefficient: h.coefficient,
+            foundation_temperature: h.foundation_temperature,
+        })
+        .frictional_heating(LinearHeating::affine(
+            self.frictional_heating.constant,
+            self.frictional_heating.rate,
+        ))
+        .initial_displacement(
+            self.initial.displacement.to_datum("initial.displacement", d)?,
+            "initial.displacement",
+        )
+        .initial_velocity(
+            self.initial.velocity.to_datum("initial.velocity", d)?,
+            "initial.velocity",
+        )
+        .initial_temperature(
+            self.initial.temperature.to_datum("initial.temperature", 1)?,
+            "initial.temperature",
+        );
+        builder = match self.friction {
+            FrictionSpec::SlipWeakening { bound, a, b, alpha } => builder.friction(SlipWeakening {
+                scale: bound,
+                a,
+                b,
+                alpha,
+            }),
+            FrictionSpec::Tresca { bound } => builder.friction(Tresca { scale: bound }),
+        };
+        let loads = &self.loads;
+        builder = builder
+            .labelled_load(
+                LoadTarget::BodyForce,
+                loads.body_force.to_datum("loads.body_force", d)?,
+                "loads.body_force".into(),
+            )
+            .labelled_load(
+                LoadTarget::HeatSource,
+                loads.heat_source.to_datum("loads.heat_source", 1)?,
+                "loads.heat_source".into(),
+            );
+        for (i, t) in loads.traction.iter().enumerate() {
+            let key = format!("loads.traction[{i}]");
+            let datum = t.datum_spec(&key)?.to_datum(&key, d)?;
+            builder = builder.labelled_load(LoadTarget::Traction(t.part.clone()), datum, key);
+        }
+        for (i, p) in loads.pressure.iter().enumerate() {
+            let key = format!("loads.pressure[{i}].value");
+            let datum = p.value.to_datum(&key, 1)?;
+            builder = builder.labelled_load(LoadTarget::Pressure(p.part.clone()), datum, key);
+        }
+        Ok(builder)
+    }
+
+    /// The discrete problem of the scenario.
+    pub fn build(&self) -> Result<Problem, Error> {
+        self.builder()?.build()
+    }
+
+    /// The solver settings of the scenario.
+    pub fn solver_params(&self) -> SolverParams {
+        let s = &self.solver;
+        SolverParams {
+            kind: s.kind,
+            tolerance: s.tolerance,
+            max_convexification: s.max_convexification,
+            inner_tolerance: s.inner_tolerance,
+            max_inner: s.max_inner,
+        }
+    }
+
+    /// What a run of the scenario writes, and when.
+    pub fn output_plan(&self) -> OutputPlan {
+        OutputPlan {
+            steps: self.output_steps(),
+            vtk: self.output.vtk,
+            csv: self.output.csv,
+            slip_tolerance: self.solver.slip_tolerance,
+            record: Some(self.to_toml()),
+        }
+    }
+
+    /// Builds and runs the scenario without writing files (tests and studies); returns the
+    /// summary and the state at T.
+    pub fn run_quiet(&self) -> Result<(Summary, State), Error> {
+        let problem = self.build()?;
+        crate::driver::run_quiet(&problem, &self.solver_params(), &self.output_plan())
+    }
+}
+
+fn names(list: &[String]) -> Vec<&str> {
+    list.iter().map(String::as_str).collect()
+}
+
+/// Takes a relative `mesh.file` of a scenario file relative to the file's folder.
+fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
+    let (Some(folder), Some(Value::Table(mesh))) = (folder, user.get_mut("mesh")) else {
+        return;
+    };
+    if let Some(Value::String(file)) = mesh.get_mut("file") {
+        if Path::new(file.as_str()).is_relative() {
+            *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+        }
     }
 }
 
@@ -418,16 +876,6 @@ fn at_least_one(key: &str, v: usize) -> Result<(), Error> {
     }
 }
 
-fn vector(key: &str, v: &[f64], dim: usize) -> Result<(), Error> {
-    if v.len() != dim {
-        return Err(invalid(key, &v, &format!("{dim} components (one per space dimension)")));
-    }
-    for &x in v {
-        finite(key, x)?;
-    }
-    Ok(())
-}
-
 /// Turns a deserialization error into one that names the dotted key it failed at, found from
 /// the error's span in the (re-serialized) scenario text.
 fn describe(e: &toml::de::Error, text: &str) -> Error {
@@ -465,17 +913,58 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
 
 /// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
 /// and checked when the scenario is read.
-const OPTIONAL_KEYS: &[&str] = &["mesh.nz", "boundary.symmetry"];
+const OPTIONAL_KEYS: &[&str] = &["mesh.nz", "mesh.file", "boundary.symmetry", "loads.pressure"];
+
+/// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
+/// any of these forms ([`DatumSpec`] checks the new value).
+const DATUM_KEYS: &[&str] = &[
+    "loads.body_force",
+    "loads.heat_source",
+    "initial.displacement",
+    "initial.velocity",
+    "initial.temperature",
+];
+
+/// Keys that existed once, with what replaced them.
+const REMOVED_KEYS: &[(&str, &str)] = &[(
+    "boundary.contact_normal",
+    "nothing: each contact node's outward normal now comes from the mesh; remove the key",
+)];
 
 /// Lays `user` over `base`, key by key. A key unknown to the base is an error naming its path. A
-/// table whose `law` changes is replaced whole, since its keys depend on the law.
+/// table whose `law` changes is replaced whole, since its keys depend on the law; a `mesh.file`
+/// replaces the structured generator (the base's geometry and cell counts go).
 fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
+    if prefix.is_empty() {
+        take_mesh_file(base, &user)?;
+    }
     for (key, value) in user {
         let path = if prefix.is_empty() {
             key.clone()
         } else {
             format!("{prefix}.{key}")
         };
+        if let Some((_, instead)) = REMOVED_KEYS.iter().find(|(removed, _)| *removed == path) {
+            return Err(invalid(
+                &path,
+                &value.to_string(),
+                &format!("no such key any more, {instead}"),
+            ));
+        }
+        if prefix == "mesh" && base.contains_key("file") && ["nx", "ny", "nz"].contains(&key.as_str()) {
+            return Err(invalid(
+                &path,
+                &value.to_string(),
+                "no cell counts beside mesh.file (they belong to the structured generator)",
+            ));
+        }
+        if prefix.is_empty() && key == "geometry" && !base.contains_key("geometry") {
+            return Err(invalid(
+                "geometry",
+                &value.to_string(),
+                "no geometry beside mesh.file (the mesh file gives the geometry)",
+            ));
+        }
         if !base.contains_key(&key) && OPTIONAL_KEYS.contains(&path.as_str()) {
             base.insert(key, value);
             continue;
@@ -487,6 +976,10 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
                 expected: format!("{known:?}"),
             });
         };
+        if DATUM_KEYS.contains(&path.as_str()) {
+            *slot = value;
+            continue;
+        }
         match (slot, value) {
             (Value::Table(b), Value::Table(u)) => {
                 let tag = ["law"].into_iter().find(|t| b.contains_key(*t));
@@ -503,6 +996,34 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
             }
         }
     }
+    Ok(())
+}
+
+/// A user table that sets `mesh.file` replaces the generator: the base's geometry and cell
+/// counts go, and the user may not give them beside the file.
+fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
+    let Some(Value::Table(mesh)) = user.get("mesh") else {
+        return Ok(());
+    };
+    if !mesh.contains_key("file") {
+        return Ok(());
+    }
+    if let Some(key) = ["nx", "ny", "nz"].into_iter().find(|k| mesh.contains_key(*k)) {
+        return Err(invalid(
+            &format!("mesh.{key}"),
+            &mesh[key].to_string(),
+            "no cell counts beside mesh.file (they belong to the structured generator)",
+        ));
+    }
+    if let Some(geometry) = user.get("geometry") {
+        return Err(invalid(
+            "geometry",
+            &geometry.to_string(),
+            "no geometry beside mesh.file (the mesh file gives the geometry)",
+        ));
+    }
+    base.remove("geometry");
+    base.insert("mesh".into(), Value::Table(Table::new()));
     Ok(())
 }
 
@@ -587,7 +1108,7 @@ mod tests {
     #[test]
     fn default_is_the_paper_example() {
         let s = Scenario::default();
-        assert_eq!(s.geometry.lengths, vec![40.0, 10.0]);
+        assert_eq!(s.structured().unwrap().lengths, vec![40.0, 10.0]);
         assert_eq!(s.material.density, 100.0);
         assert_eq!(
             s.friction,
@@ -598,14 +1119,14 @@ mod tests {
                 alpha: 100.0
             }
         );
-        assert_eq!(s.loads.traction[0].rate, vec![0.0, -800.0]);
+        assert_eq!(s.loads.traction[0].rate, Some(vec![0.0, -800.0]));
         assert_eq!(s.output_steps(), vec![16, 32, 48, 64]);
     }
 
     #[test]
     fn overrides_and_files_overlay_the_default() {
         let s = Scenario::load(Some("[mesh]\nnx = 8\n[time]\nfinal_time = 2"), &["mesh.ny=2".into()]).unwrap();
-        assert_eq!((s.mesh.nx, s.mesh.ny), (8, 2));
+        assert_eq!((s.mesh.nx, s.mesh.ny), (Some(8), Some(2)));
         assert_eq!(s.time.final_time, 2.0);
         let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
         assert_eq!(t.friction, FrictionSpec::Tresca { bound: 3.0 });

@@ -5,12 +5,11 @@ use serde::Serialize;
 
 use crate::error::Error;
 use crate::problem::Problem;
-use crate::scenario::SolverKind;
 use crate::solver::fast::FastSolver;
 use crate::solver::newton::NewtonParams;
 use crate::solver::paper::{PaperParams, PaperSolver};
 use crate::solver::system::{norm2, State, StepSystem};
-use crate::solver::StepInfo;
+use crate::solver::{SolverKind, SolverParams, StepInfo};
 
 /// The contact state at one node of Γ_C.
 #[derive(Debug, Clone, Serialize)]
@@ -87,7 +86,7 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
         .collect()
 }
 
-/// A nonsmooth solver of one time step, chosen by the scenario.
+/// A nonsmooth solver of one time step, chosen by [`SolverParams::kind`].
 pub enum StepSolver<'a> {
     /// The paper's convexification + augmented Lagrangian.
     Paper(PaperSolver<'a>),
@@ -96,17 +95,16 @@ pub enum StepSolver<'a> {
 }
 
 impl<'a> StepSolver<'a> {
-    /// The solver the scenario asks for.
-    pub fn new(problem: &'a Problem, system: &'a StepSystem) -> Self {
-        let s = &problem.scenario.solver;
+    /// Sets the chosen solver up (the condensation onto Γ_C).
+    pub fn new(problem: &'a Problem, system: &'a StepSystem, params: &SolverParams) -> Self {
         let paper_params = PaperParams {
-            tolerance: s.tolerance,
-            max_convexification: s.max_convexification,
-            inner_tolerance: s.inner_tolerance,
-            max_inner: s.max_inner,
+            tolerance: params.tolerance,
+            max_convexification: params.max_convexification,
+            inner_tolerance: params.inner_tolerance,
+            max_inner: params.max_inner,
         };
         let paper = PaperSolver::new(problem, system, paper_params);
-        match s.kind {
+        match params.kind {
             SolverKind::Paper => StepSolver::Paper(paper),
             SolverKind::Fast => StepSolver::Fast(FastSolver::new(
                 problem,
@@ -114,7 +112,7 @@ impl<'a> StepSolver<'a> {
                 paper,
                 paper_params,
                 NewtonParams {
-                    tolerance: s.inner_tolerance,
+                    tolerance: params.inner_tolerance,
                     max_iterations: 8,
                 },
             )),
@@ -130,18 +128,29 @@ impl<'a> StepSolver<'a> {
     }
 }
 
-/// Runs all N steps from the initial state; `observer` sees every new state.
-pub fn run(
+/// The time loop: steps n = 1 … N from the initial state (10); `observer` sees every new state
+/// with the step's solver figures and may stop the run with an error. Every run goes through
+/// here ([`crate::driver`] observes it for output, progress and timings).
+pub fn march(
     problem: &Problem,
-    system: &StepSystem,
+    solver: &StepSolver,
     mut observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
 ) -> Result<State, Error> {
-    let solver = StepSolver::new(problem, system);
     let mut state = State::initial(problem);
-    for _ in 0..problem.scenario.time.steps {
+    for _ in 0..problem.time.steps {
         let (next, info) = solver.step(&state)?;
         observer(&next, &info)?;
         state = next;
     }
     Ok(state)
+}
+
+/// Sets the solver up and runs all N steps ([`march`]).
+pub fn run(
+    problem: &Problem,
+    system: &StepSystem,
+    params: &SolverParams,
+    observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
+) -> Result<State, Error> {
+    march(problem, &StepSolver::new(problem, system, params), observer)
 }

@@ -6,7 +6,7 @@ use common::{paper_material, solve_interior};
 
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{rectangle, Mesh};
-use thermocontact::{Problem, Scenario};
+use thermocontact::Scenario;
 
 /// A 6 × 4 mesh of (0, 3) × (0, 2) whose interior nodes are moved off the grid, so that the
 /// patch tests do not profit from symmetry.
@@ -129,10 +129,10 @@ fn contact_weights_sum_to_the_contact_length() {
     let w = boundary_weights(&mesh, &[bottom]);
     assert!((w.iter().sum::<f64>() - 40.0).abs() < 1e-12);
     assert!((w[0] - 0.5).abs() < 1e-15 && (w[1] - 1.0).abs() < 1e-15);
-    let problem = Problem::new(&Scenario::default()).unwrap();
+    let problem = Scenario::default().build().unwrap();
     assert!((problem.contact_measure() - 40.0).abs() < 1e-12);
     // The clamped corner (0, 0) carries no friction; the corner (40, 0) is a contact node with a
     // prescribed temperature.
-    assert_eq!(problem.contact.len(), problem.scenario.mesh.nx);
+    assert_eq!(Some(problem.contact.len()), Scenario::default().mesh.nx);
     assert!(problem.contact.last().unwrap().theta_dof.is_none());
 }

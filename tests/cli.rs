@@ -32,7 +32,15 @@ fn run_writes_summary_vtk_series_and_contact_csvs() {
         let n = o["n"].as_u64().unwrap();
         assert!(out.join(format!("solution_{n:04}.vtu")).is_file());
         let csv = std::fs::read_to_string(out.join(format!("contact_{n:04}.csv"))).unwrap();
-        let slip_in_csv = csv.lines().skip(1).filter(|l| l.split(',').nth(5) == Some("1")).count();
+        assert!(csv.starts_with("x,y,nu_x,nu_y,w_tau,xi,bound,slip,theta\n"), "{csv}");
+        let slip_in_csv = csv.lines().skip(1).filter(|l| l.split(',').nth(7) == Some("1")).count();
+        // The paper's Γ_C is the bottom: every node's normal is (0, −1).
+        assert!(
+            csv.lines()
+                .skip(1)
+                .all(|l| l.split(',').nth(2) == Some("0") && l.split(',').nth(3) == Some("-1")),
+            "{csv}"
+        );
         assert_eq!(slip_in_csv as u64, o["slip_nodes"].as_u64().unwrap());
         assert_eq!(
             csv.lines().count() - 1,
@@ -44,7 +52,7 @@ fn run_writes_summary_vtk_series_and_contact_csvs() {
     // The resolved scenario is saved and loads back to the same run.
     let saved = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
     let again = thermocontact::Scenario::load(Some(&saved), &[]).unwrap();
-    assert_eq!(again.mesh.nx, 16);
+    assert_eq!(again.mesh.nx, Some(16));
     std::fs::remove_dir_all(&out).ok();
 }
 

@@ -14,7 +14,7 @@ use thermocontact::solver::system::StepSystem;
 use thermocontact::time::{self, contact_rows};
 use thermocontact::verification::manufactured::Manufactured;
 use thermocontact::verification::study::{self, LevelRun, StudyReport};
-use thermocontact::{Problem, Scenario};
+use thermocontact::Scenario;
 
 fn quiet(_: &LevelRun) {}
 
@@ -85,11 +85,16 @@ fn paper_example_self_converges_on_levels_half_to_one_sixteenth() {
 fn manufactured_contact_has_the_exact_stick_and_slip_zones() {
     let scenario = Manufactured::scenario(&["mesh.nx=32".into(), "mesh.ny=8".into(), "time.steps=8".into()]).unwrap();
     let exact = Manufactured::new(&scenario).unwrap();
-    let problem = Problem::with_extra_loads(&scenario, Box::new(exact)).unwrap();
+    let problem = scenario
+        .builder()
+        .unwrap()
+        .extra_loads(Box::new(exact))
+        .build()
+        .unwrap();
     let system = StepSystem::new(&problem).unwrap();
     let tolerance = scenario.solver.slip_tolerance;
     let (mut stick, mut slip) = (0, 0);
-    time::run(&problem, &system, |state, _| {
+    time::run(&problem, &system, &scenario.solver_params(), |state, _| {
         if state.n == 4 {
             let t = 0.5;
             for row in contact_rows(&problem, state, tolerance) {

@@ -249,7 +249,8 @@ fn the_report_tables_were_made_with_the_default_scenario() {
     let end = begin + report[begin..].find(END_MARKER).expect("and the end marker");
     let tables = &report[begin..end];
     let default = Scenario::default();
-    let label = format!("| {} × {} (default) |", default.mesh.nx, default.mesh.ny);
+    let grid = default.structured().unwrap();
+    let label = format!("| {} × {} (default) |", grid.nx(), grid.ny());
     assert!(tables.contains(&label), "the generated tables mark {label}");
     assert!(
         tables.contains(&format!("#### Slip nodes, θ_D = {} °C", default.boundary.temperature)),

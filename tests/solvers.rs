@@ -1,9 +1,8 @@
 //! Agreement of the two nonsmooth solvers: the fast semismooth Newton solver reaches the same
 //! discrete solution as the paper's convexification + augmented-Lagrangian solver.
 
-use thermocontact::driver::run_quiet;
 use thermocontact::norms;
-use thermocontact::{Problem, Scenario};
+use thermocontact::Scenario;
 
 fn compare(file: Option<&str>, overrides: &[&str]) {
     let load = |kind: &str| {
@@ -11,9 +10,9 @@ fn compare(file: Option<&str>, overrides: &[&str]) {
         all.push(format!("solver.kind={kind}"));
         Scenario::load(file, &all).unwrap()
     };
-    let (paper_summary, paper) = run_quiet(&load("paper")).unwrap();
-    let (fast_summary, fast) = run_quiet(&load("fast")).unwrap();
-    let problem = Problem::new(&load("paper")).unwrap();
+    let (paper_summary, paper) = load("paper").run_quiet().unwrap();
+    let (fast_summary, fast) = load("fast").run_quiet().unwrap();
+    let problem = load("paper").build().unwrap();
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
     let m = &problem.matrices;
     // The paper's solver stops at relative increments ε_conv = 1e-6 (77)–(80); both solutions

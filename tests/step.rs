@@ -3,11 +3,10 @@
 
 use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::law_residual;
-use thermocontact::driver::run_quiet;
 use thermocontact::solver::condensed::Condensation;
 use thermocontact::solver::system::{add_contact_terms, tangential_velocities, State, StepSystem};
 use thermocontact::time::{contact_rows, StepSolver};
-use thermocontact::{Problem, Scenario};
+use thermocontact::Scenario;
 
 fn coarse(overrides: &[&str]) -> Scenario {
     let mut all = vec!["mesh.nx=16".to_string(), "mesh.ny=4".to_string()];
@@ -21,9 +20,9 @@ fn coarse(overrides: &[&str]) -> Scenario {
 #[test]
 fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
     let scenario = coarse(&["friction.bound=0.0", "material.thermal_expansion=0.0"]);
-    let problem = Problem::new(&scenario).unwrap();
+    let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system);
+    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
     let (state, _) = solver.step(&State::initial(&problem)).unwrap();
 
     let k = problem.time_step();
@@ -45,7 +44,7 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
             a[(i, j)] = pi.iter().zip(&s).map(|(x, y)| x * y).sum();
         }
     }
-    let force = problem.force(k);
+    let force = problem.force(k).unwrap();
     let mut b = faer::Mat::<f64>::zeros(n, 1);
     for (i, pi) in columns.iter().enumerate() {
         b[(i, 0)] = pi.iter().zip(&force).map(|(x, y)| x * y).sum();
@@ -68,7 +67,7 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
 /// The condensed compliances C and H reproduce full solves with arbitrary contact loads.
 #[test]
 fn condensation_matches_full_solves() {
-    let problem = Problem::new(&coarse(&[])).unwrap();
+    let problem = coarse(&[]).build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
     let cond = Condensation::new(&problem, &system);
     let n_c = problem.contact.len();
@@ -93,9 +92,9 @@ fn condensation_matches_full_solves() {
 #[test]
 fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     let scenario = coarse(&[]);
-    let problem = Problem::new(&scenario).unwrap();
+    let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system);
+    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
     let mut state = State::initial(&problem);
     let tol = scenario.solver.slip_tolerance;
     let mut slipped = 0;
@@ -120,7 +119,7 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     }
     assert_eq!(state.n, scenario.time.steps);
     assert!(slipped > 0, "the example has slipping nodes");
-    let (summary, last) = run_quiet(&scenario).unwrap();
+    let (summary, last) = scenario.run_quiet().unwrap();
     assert_eq!(summary.outputs.len(), 4);
     let end = summary.outputs.last().unwrap();
     assert_eq!(end.slip_nodes + end.stick_nodes, problem.contact.len());
@@ -136,9 +135,9 @@ fn non_convergence_is_reported_with_step_and_increments() {
             "solver.max_convexification=1",
             "solver.tolerance=1e-14",
         ]);
-        let problem = Problem::new(&scenario).unwrap();
+        let problem = scenario.build().unwrap();
         let system = StepSystem::new(&problem).unwrap();
-        let solver = StepSolver::new(&problem, &system);
+        let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
         let mut state = State::initial(&problem);
         let error = loop {
             match solver.step(&state) {

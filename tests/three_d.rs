@@ -9,12 +9,11 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, SlipWeakening};
-use thermocontact::driver::run_quiet;
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::solver::system::{State, StepSystem};
 use thermocontact::time::{contact_rows, StepSolver};
-use thermocontact::{Problem, Scenario};
+use thermocontact::Scenario;
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
 
@@ -186,9 +185,9 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
         ],
     )
     .unwrap();
-    let problem = Problem::new(&scenario).unwrap();
+    let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system);
+    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
     let law = problem.friction.as_ref();
     let tol = scenario.solver.slip_tolerance;
     let mut state = State::initial(&problem);
@@ -260,10 +259,10 @@ fn plane_strain_slab_reproduces_the_2d_example() {
         .map(String::from),
     );
     let scenario_3d = Scenario::load(Some(PAPER3D), &slab).unwrap();
-    let (summary_2d, last_2d) = run_quiet(&scenario_2d).unwrap();
-    let (summary_3d, last_3d) = run_quiet(&scenario_3d).unwrap();
-    let problem_2d = Problem::new(&scenario_2d).unwrap();
-    let problem_3d = Problem::new(&scenario_3d).unwrap();
+    let (summary_2d, last_2d) = scenario_2d.run_quiet().unwrap();
+    let (summary_3d, last_3d) = scenario_3d.run_quiet().unwrap();
+    let problem_2d = scenario_2d.build().unwrap();
+    let problem_3d = scenario_3d.build().unwrap();
 
     let max_abs = |v: &mut dyn Iterator<Item = f64>| v.fold(0.0f64, |a, x| a.max(x.abs()));
     let w_y = max_abs(&mut last_3d.w.chunks_exact(3).map(|v| v[1]));
@@ -324,7 +323,7 @@ fn symmetry_planes_shape_the_space_and_bad_ones_are_named() {
     )
     .unwrap();
     assert_eq!(Scenario::load(Some(&slab.to_toml()), &[]).unwrap(), slab);
-    let problem = Problem::new(&slab).unwrap();
+    let problem = slab.build().unwrap();
     // Nodes: 5 × 3 × 3 = 45; clamped x = 0: 9; contact (z = 0, x > 0): 12 of which 8 on a
     // y face (1 unknown: w_x) and 4 inside (2); symmetry-only nodes (y face, z > 0, x > 0):
     // 16 (2 unknowns); the rest: 8 interior-in-y nodes (3 unknowns).
@@ -379,10 +378,14 @@ fn paper3d_scenario_runs_from_the_command_line() {
         let n = o["n"].as_u64().unwrap();
         let csv = std::fs::read_to_string(out.join(format!("contact_{n:04}.csv"))).unwrap();
         assert!(
-            csv.starts_with("x,y,z,w_tau1,w_tau2,xi1,xi2,bound,slip,theta\n"),
+            csv.starts_with("x,y,z,nu_x,nu_y,nu_z,t1_x,t1_y,t1_z,w_tau1,w_tau2,xi1,xi2,bound,slip,theta\n"),
             "{csv}"
         );
-        let slip = csv.lines().skip(1).filter(|l| l.split(',').nth(8) == Some("1")).count();
+        let slip = csv
+            .lines()
+            .skip(1)
+            .filter(|l| l.split(',').nth(14) == Some("1"))
+            .count();
         assert_eq!(slip as u64, o["slip_nodes"].as_u64().unwrap());
         assert_eq!(
             csv.lines().count() - 1,

@@ -1,8 +1,6 @@
 //! Heat exchange with the foundation and frictional heating on Γ_C, eq. (9):
 //! −K∇θ·ν ∈ ∂j(θ) − h_τ(‖u̇_τ‖).
 
-use crate::scenario::Affine;
-
 /// A heat-exchange potential j whose derivative is affine, ∂j(θ) = k_e (θ − θ_R).
 ///
 /// H(j)(d) makes ∂j single-valued and Lipschitz (Remark 3); an affine ∂j enters the step matrix
@@ -44,16 +42,25 @@ pub trait FrictionalHeating: Send + Sync + std::fmt::Debug {
     fn heat(&self, t: f64, r: f64) -> f64;
 }
 
-/// h_τ(t, r) = λ(t) r with λ affine in t (the paper: λ = 10 t).
-#[derive(Debug, Clone, PartialEq)]
+/// h_τ(t, r) = λ(t) r with λ(t) = λ₀ + λ₁ t affine in t (the paper: λ = 10 t).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LinearHeating {
-    /// λ(t).
-    pub rate: Affine<f64>,
+    /// λ₀.
+    pub constant: f64,
+    /// λ₁.
+    pub rate: f64,
+}
+
+impl LinearHeating {
+    /// λ(t) = constant + rate · t.
+    pub fn affine(constant: f64, rate: f64) -> Self {
+        LinearHeating { constant, rate }
+    }
 }
 
 impl FrictionalHeating for LinearHeating {
     fn heat(&self, t: f64, r: f64) -> f64 {
-        self.rate.at(t) * r
+        (self.constant + self.rate * t) * r
     }
 }
 
@@ -69,12 +76,7 @@ mod tests {
         };
         assert_eq!(j.derivative(25.0), 50.0);
         assert_eq!(j.potential(3.0), 9.0);
-        let h = LinearHeating {
-            rate: Affine {
-                constant: 0.0,
-                rate: 10.0,
-            },
-        };
+        let h = LinearHeating::affine(0.0, 10.0);
         assert!((h.heat(0.5, 0.2) - 1.0).abs() < 1e-15);
     }
 }

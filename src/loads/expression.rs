@@ -463,13 +463,21 @@ impl<'a> Parser<'a> {
                 let called = self.peek() == Token::Symbol('(');
                 if let Some(k) = VARIABLES.iter().position(|v| *v == name) {
                     if called {
-                        return Err(parse_error(self.text, at, &format!("`{name}` is a variable, not a function")));
+                        return Err(parse_error(
+                            self.text,
+                            at,
+                            &format!("`{name}` is a variable, not a function"),
+                        ));
                     }
                     return Ok(Node::Variable(k));
                 }
                 if let Some((_, value)) = CONSTANTS.iter().find(|(c, _)| *c == name) {
                     if called {
-                        return Err(parse_error(self.text, at, &format!("`{name}` is a constant, not a function")));
+                        return Err(parse_error(
+                            self.text,
+                            at,
+                            &format!("`{name}` is a constant, not a function"),
+                        ));
                     }
                     return Ok(Node::Number(*value));
                 }
@@ -545,10 +553,16 @@ mod tests {
 
     #[test]
     fn expressions_agree_with_rust() {
-        let points = [([0.3, -1.7, 2.2], 0.7), ([4.0, 0.5, -0.25], 2.5), ([-2.0, 3.0, 1.0], 0.0)];
+        let points = [
+            ([0.3, -1.7, 2.2], 0.7),
+            ([4.0, 0.5, -0.25], 2.5),
+            ([-2.0, 3.0, 1.0], 0.0),
+        ];
         type Reference = fn([f64; 3], f64) -> f64;
         let cases: [(&str, Reference); 14] = [
-            ("-20*t*y/sqrt(x^2+y^2)", |x, t| -20.0 * t * x[1] / (x[0] * x[0] + x[1] * x[1]).sqrt()),
+            ("-20*t*y/sqrt(x^2+y^2)", |x, t| {
+                -20.0 * t * x[1] / (x[0] * x[0] + x[1] * x[1]).sqrt()
+            }),
             ("800*t", |_, t| 800.0 * t),
             ("-x^2", |x, _| -(x[0] * x[0])),
             ("exp(-x^2)", |x, _| (-(x[0] * x[0])).exp()),
@@ -557,11 +571,15 @@ mod tests {
             ("x - y - z", |x, _| x[0] - x[1] - x[2]),
             ("x / y / 2", |x, _| x[0] / x[1] / 2.0),
             ("-x*y + -(z)", |x, _| -x[0] * x[1] - x[2]),
-            ("min(x, y) * max(z, 1e-3) + abs(y)", |x, _| x[0].min(x[1]) * x[2].max(1e-3) + x[1].abs()),
+            ("min(x, y) * max(z, 1e-3) + abs(y)", |x, _| {
+                x[0].min(x[1]) * x[2].max(1e-3) + x[1].abs()
+            }),
             ("sin(pi*x) + cos(y)*tan(0.1*z)", |x, _| {
                 (std::f64::consts::PI * x[0]).sin() + x[1].cos() * (0.1 * x[2]).tan()
             }),
-            ("log(e) + ln(abs(x)+1) + log10(100)", |x, _| 1.0 + (x[0].abs() + 1.0).ln() + 2.0),
+            ("log(e) + ln(abs(x)+1) + log10(100)", |x, _| {
+                1.0 + (x[0].abs() + 1.0).ln() + 2.0
+            }),
             ("atan2(y, x) + 1.5E+2 + .5", |x, _| x[1].atan2(x[0]) + 150.5),
             ("x**2 + 2*t", |x, t| x[0] * x[0] + 2.0 * t),
         ];
@@ -616,7 +634,9 @@ mod tests {
     #[test]
     fn unknown_function_is_named() {
         let err = Expression::parse("1 + foo(x)").unwrap_err();
-        assert!(matches!(&err, ExpressionError::UnknownFunction { text, name } if text == "1 + foo(x)" && name == "foo"));
+        assert!(
+            matches!(&err, ExpressionError::UnknownFunction { text, name } if text == "1 + foo(x)" && name == "foo")
+        );
         assert!(err.to_string().contains("sqrt"));
     }
 
@@ -646,8 +666,18 @@ mod tests {
     #[test]
     fn arity_is_checked() {
         let err = Expression::parse("min(1, 2, x)").unwrap_err();
-        assert!(matches!(err, ExpressionError::Arity { expected: 2, found: 3, .. }));
-        assert!(matches!(Expression::parse("sqrt(x, y)"), Err(ExpressionError::Arity { .. })));
+        assert!(matches!(
+            err,
+            ExpressionError::Arity {
+                expected: 2,
+                found: 3,
+                ..
+            }
+        ));
+        assert!(matches!(
+            Expression::parse("sqrt(x, y)"),
+            Err(ExpressionError::Arity { .. })
+        ));
     }
 
     #[test]

@@ -8,10 +8,12 @@
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
 //! `z+`).
 
+mod annulus;
 mod cuboid;
 mod structured;
 pub(crate) mod topology;
 
+pub use annulus::{annulus, annulus_part_names};
 pub use cuboid::{cuboid, cuboid_part_names};
 pub use structured::{rectangle, rectangle_part_names};
 
@@ -161,4 +163,12 @@ impl Mesh {
             .map(|e| crate::fem::simplex::Simplex::new(self.dim, &self.cell_coords(e)).measure)
             .sum()
     }
+}
+
+// TEMP STUB until the gmsh branch lands.
+#[derive(Debug, thiserror::Error)]
+#[error("mesh error {0}")]
+pub struct MeshError(pub String);
+pub fn read_msh(path: &std::path::Path) -> Result<Mesh, MeshError> {
+    Err(MeshError(path.display().to_string()))
 }

@@ -25,7 +25,7 @@ use crate::output::figures::{
 use crate::output::{write_atomic, OutputError};
 use crate::problem::Problem;
 use crate::scenario::Scenario;
-use crate::solver::system::{norm2, State};
+use crate::solver::system::State;
 use crate::time::contact_rows;
 
 /// A slip count the paper reports: at time `t` with α_exp = `expansion`, `slip_nodes` slip.
@@ -135,26 +135,33 @@ pub fn record_run(scenario: &Scenario, keep_states: bool) -> Result<Recorded, Er
         max_stick_rate: 0.0,
         min_slip_rate: f64::INFINITY,
     };
-    let run = driver::run_observed(scenario, &RunOptions::default(), |problem, state, _| {
-        let rows = contact_rows(problem, state, tolerance);
-        for row in &rows {
-            let rate = norm2(&row.w_tau);
-            if row.slip {
-                separation.min_slip_rate = separation.min_slip_rate.min(rate);
-            } else {
-                separation.max_stick_rate = separation.max_stick_rate.max(rate);
+    let problem = scenario.build()?;
+    let run = driver::run_observed(
+        &problem,
+        &scenario.solver_params(),
+        &scenario.output_plan(),
+        &RunOptions::default(),
+        |problem, state, _| {
+            let rows = contact_rows(problem, state, tolerance);
+            for row in &rows {
+                let rate = row.slip_rate();
+                if row.slip {
+                    separation.min_slip_rate = separation.min_slip_rate.min(rate);
+                } else {
+                    separation.max_stick_rate = separation.max_stick_rate.max(rate);
+                }
             }
-        }
-        slip_history.push((state.n as f64 * k, rows.iter().filter(|r| r.slip).count()));
-        if keep_states && output_steps.contains(&state.n) {
-            snapshots.push(Snapshot {
-                record: record(problem, state, tolerance),
-                state: state.clone(),
-            });
-        }
-    })?;
+            slip_history.push((state.n as f64 * k, rows.iter().filter(|r| r.slip).count()));
+            if keep_states && output_steps.contains(&state.n) {
+                snapshots.push(Snapshot {
+                    record: record(problem, state, tolerance),
+                    state: state.clone(),
+                });
+            }
+        },
+    )?;
     Ok(Recorded {
-        problem: run.problem,
+        problem,
         summary: run.summary,
         snapshots,
         slip_history,
@@ -262,9 +269,9 @@ pub fn make_figures(
     }
     if scenario.dim() != 2 {
         return Err(ReproductionError::InvalidOption {
-            option: "geometry.lengths",
-            value: format!("{:?}", scenario.geometry.lengths),
-            expected: "a rectangle (2 lengths): the figures are planar".into(),
+            option: "mesh",
+            value: format!("{}D", scenario.dim()),
+            expected: "a 2D mesh: the figures are planar".into(),
         });
     }
     scenario.validate()?;
@@ -287,10 +294,16 @@ pub fn make_figures(
         variants.push((a, record_run(&s, true)?));
     }
 
+    let mesh = match (scenario.structured(), &scenario.mesh.file) {
+        (Some(s), _) => format!("mesh {} × {}", s.nx(), s.ny()),
+        (None, Some(file)) => format!(
+            "mesh {}",
+            file.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
+        ),
+        (None, None) => String::new(),
+    };
     let setting = format!(
-        "mesh {} × {}, k = 1/{}, θ_D = {} °C, slip when |w_τ| > {} m/s",
-        scenario.mesh.nx,
-        scenario.mesh.ny,
+        "{mesh}, k = 1/{}, θ_D = {} °C, slip when |w_τ| > {} m/s",
         scenario.time.steps,
         format_number(scenario.boundary.temperature),
         format_number(scenario.solver.slip_tolerance)

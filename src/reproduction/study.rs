@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::{is_paper_example, paper_count, record_run, ReproductionError, Separation, PAPER_COUNTS};
 use crate::output::figures::format_number;
 use crate::output::{write_atomic, OutputError};
-use crate::scenario::Scenario;
+use crate::scenario::{DatumSpec, Scenario};
 use crate::solver::system::norm2;
 
 /// The line after which `--report` writes the generated tables.
@@ -49,7 +49,13 @@ impl StudyPlan {
     /// 10⁻⁹ … 10⁻².
     pub fn paper(base: &Scenario) -> Self {
         StudyPlan {
-            boundary_temperatures: vec![0.0, base.initial.temperature],
+            boundary_temperatures: vec![
+                0.0,
+                base.initial
+                    .temperature
+                    .as_scalar()
+                    .unwrap_or(base.boundary.temperature),
+            ],
             meshes: vec![16, 32, 40, 64, 128],
             steps: vec![16, 32, 64],
             expansions: vec![1e-4, 3e-4, 1e-3],
@@ -165,9 +171,12 @@ pub struct Study {
     pub wall_time: f64,
 }
 
+/// The study's scenarios are structured rectangles (checked in [`run_study`]).
+const STRUCTURED: &str = "the study runs on the structured rectangle";
+
 /// ny for nx cells along L₁ with cells as square as the rectangle allows (nx/4 for 40 × 10 m).
 pub fn ny_for(base: &Scenario, nx: usize) -> usize {
-    let l = &base.geometry.lengths;
+    let l = base.structured().expect(STRUCTURED).lengths;
     ((nx as f64 * l[1] / l[0]).round() as usize).max(1)
 }
 
@@ -215,8 +224,7 @@ pub fn cases(base: &Scenario, plan: &StudyPlan) -> Vec<Case> {
 
 fn scenario_for(base: &Scenario, case: &Case) -> Scenario {
     let mut s = base.clone();
-    s.mesh.nx = case.nx;
-    s.mesh.ny = case.ny;
+    s.set_cells(case.nx, case.ny);
     s.time.steps = case.steps;
     s.boundary.temperature = case.boundary_temperature;
     s.material.thermal_expansion = case.expansion;
@@ -277,6 +285,13 @@ pub fn run_study(
 ) -> Result<Study, ReproductionError> {
     plan.validate()?;
     base.validate()?;
+    let (Some(grid), Some(theta0)) = (base.structured(), base.initial.temperature.as_scalar()) else {
+        return Err(ReproductionError::InvalidOption {
+            option: "mesh, initial.temperature",
+            value: "a mesh file or a non-uniform θ₀".into(),
+            expected: "the structured rectangle and a uniform θ₀: the study refines the paper's example".into(),
+        });
+    };
     let start = Instant::now();
     let cases = cases(base, plan);
     let mut diagnostic_cases: Vec<(String, Scenario)> = Vec::new();
@@ -285,7 +300,7 @@ pub fn run_study(
         no_expansion.material.thermal_expansion = 0.0;
         diagnostic_cases.push(("α_exp = 0 (no thermal stress)".into(), no_expansion));
         let mut cold = base.clone();
-        cold.initial.temperature = 0.0;
+        cold.initial.temperature = DatumSpec::scalar(0.0);
         cold.boundary.temperature = 0.0;
         diagnostic_cases.push(("θ₀ = θ_D = 0 (no initial thermal stress Cθ₀)".into(), cold));
     }
@@ -300,8 +315,8 @@ pub fn run_study(
     if plan.diagnostics {
         let as_is = Case {
             boundary_temperature: base.boundary.temperature,
-            nx: base.mesh.nx,
-            ny: base.mesh.ny,
+            nx: grid.nx(),
+            ny: grid.ny(),
             steps: base.time.steps,
             expansion: base.material.thermal_expansion,
         };
@@ -317,8 +332,8 @@ pub fn run_study(
         for (label, scenario) in diagnostic_cases {
             let case = Case {
                 boundary_temperature: scenario.boundary.temperature,
-                nx: scenario.mesh.nx,
-                ny: scenario.mesh.ny,
+                nx: grid.nx(),
+                ny: grid.ny(),
                 steps: scenario.time.steps,
                 expansion: scenario.material.thermal_expansion,
             };
@@ -330,14 +345,14 @@ pub fn run_study(
     Ok(Study {
         plan: plan.clone(),
         base: Base {
-            nx: base.mesh.nx,
-            ny: base.mesh.ny,
+            nx: grid.nx(),
+            ny: grid.ny(),
             steps: base.time.steps,
             boundary_temperature: base.boundary.temperature,
-            initial_temperature: base.initial.temperature,
+            initial_temperature: theta0,
             expansion: base.material.thermal_expansion,
             slip_tolerance: base.solver.slip_tolerance,
-            lengths: base.geometry.lengths.clone(),
+            lengths: grid.lengths.clone(),
             foundation_temperature: base.heat_exchange.foundation_temperature,
             wave_speeds: wave_speeds(base),
             paper_example: is_paper_example(base),
@@ -767,7 +782,7 @@ mod tests {
         let base = Scenario::default();
         let plan = StudyPlan::paper(&base);
         let cases = cases(&base, &plan);
-        for theta_d in [0.0, base.initial.temperature] {
+        for theta_d in [0.0, base.initial.temperature.as_scalar().unwrap()] {
             for nx in [16, 32, 40, 64, 128] {
                 for steps in [16, 32, 64] {
                     assert!(cases.iter().any(|c| c.boundary_temperature == theta_d

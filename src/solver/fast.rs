@@ -64,7 +64,7 @@ impl<'a> FastSolver<'a> {
         let tangential = problem.dim() - 1;
         let n = previous.n + 1;
         let t = n as f64 * problem.time_step();
-        let base = self.system.rhs(problem, previous, t);
+        let base = self.system.rhs(problem, previous, t)?;
         let mut x = base.clone();
         self.system.solve_in_place(&mut x);
         let w_free = tangential_velocities(problem, &x);

@@ -11,11 +11,59 @@ pub mod newton;
 pub mod paper;
 pub mod system;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::norms;
 use crate::problem::Problem;
 use system::State;
+
+/// Which nonsmooth solver runs each time step.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverKind {
+    /// Convexification loop + Uzawa augmented Lagrangian (Problem 17).
+    Paper,
+    /// Semismooth Newton on the condensed nonmonotone law, the convexification loop where the
+    /// law is too steep.
+    Fast,
+}
+
+impl SolverKind {
+    /// The name in scenarios and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolverKind::Paper => "paper",
+            SolverKind::Fast => "fast",
+        }
+    }
+}
+
+/// The step solver's settings; defaults are the paper's (ε_conv = 1e-6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverParams {
+    /// Which solver.
+    pub kind: SolverKind,
+    /// ε_conv of the stop criteria (77)–(80).
+    pub tolerance: f64,
+    /// Cap on convexification iterations per step.
+    pub max_convexification: usize,
+    /// Relative tolerance of the inner solvers (Uzawa, Newton).
+    pub inner_tolerance: f64,
+    /// Cap on inner Uzawa iterations per convex problem.
+    pub max_inner: usize,
+}
+
+impl Default for SolverParams {
+    fn default() -> Self {
+        SolverParams {
+            kind: SolverKind::Fast,
+            tolerance: 1e-6,
+            max_convexification: 200,
+            inner_tolerance: 1e-10,
+            max_inner: 20_000,
+        }
+    }
+}
 
 /// What one time step cost and how it ended.
 #[derive(Debug, Clone, Copy, Default, Serialize)]

@@ -74,7 +74,7 @@ impl<'a> PaperSolver<'a> {
         let t = n as f64 * problem.time_step();
         let n_w = problem.n_w();
         let n_contact = problem.contact.len();
-        let base = self.system.rhs(problem, previous, t);
+        let base = self.system.rhs(problem, previous, t)?;
         let mut x = base.clone();
         self.system.solve_in_place(&mut x);
         let w_free = tangential_velocities(problem, &x);

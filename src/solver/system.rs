@@ -38,21 +38,15 @@ pub struct State {
 }
 
 impl State {
-    /// The initial state (10): u₀, u₁ interpolated into E^h, θ₀ everywhere.
+    /// The initial state (10): u₀, u₁ in E^h, θ₀ at the nodes, no friction stress.
     pub fn initial(problem: &Problem) -> Self {
-        let s = &problem.scenario;
-        let d = problem.dim();
-        let n_nodes = problem.mesh.n_nodes();
-        let uniform = |v: &[f64]| -> Vec<f64> {
-            let full: Vec<f64> = (0..n_nodes * d).map(|i| v[i % d]).collect();
-            problem.velocity.prolong(&problem.velocity.restrict_values(&full))
-        };
+        let initial = &problem.initial;
         State {
             n: 0,
-            w: uniform(&s.initial.velocity),
-            u: uniform(&s.initial.displacement),
-            theta: vec![s.initial.temperature; n_nodes],
-            xi: vec![0.0; problem.contact.len() * (d - 1)],
+            w: initial.velocity.clone(),
+            u: initial.displacement.clone(),
+            theta: initial.temperature.clone(),
+            xi: vec![0.0; problem.contact.len() * (problem.dim() - 1)],
         }
     }
 }
@@ -145,13 +139,13 @@ impl StepSystem {
 
     /// The right-hand side of step n without the contact terms:
     /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
-    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Vec<f64> {
+    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
         let clock = Instant::now();
         let mats = &problem.matrices;
-        let mut mech = problem.force(t);
+        let mut mech = problem.force(t)?;
         mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
         mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
-        let mut heat = problem.heat_load(t);
+        let mut heat = problem.heat_load(t)?;
         mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
 
         let mut rhs = vec![0.0; self.n_unknowns()];
@@ -163,7 +157,7 @@ impl StepSystem {
         }
         rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
         self.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
-        rhs
+        Ok(rhs)
     }
 
     /// The work counters so far.

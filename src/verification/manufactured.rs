@@ -44,7 +44,7 @@ use super::quadrature;
 use crate::error::Error;
 use crate::material::Isotropic;
 use crate::problem::{ExtraLoads, Problem};
-use crate::scenario::Scenario;
+use crate::scenario::{DatumSpec, Scenario};
 
 /// The family's scenario overlay (material, laws, layout), `scenarios/manufactured.toml`.
 pub const MANUFACTURED_TOML: &str = include_str!("../../scenarios/manufactured.toml");
@@ -89,26 +89,32 @@ impl Manufactured {
         let b = &scenario.boundary;
         let strings = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
         let l = &scenario.loads;
-        let no_loads = l
-            .body_force
-            .constant
-            .iter()
-            .chain(&l.body_force.rate)
-            .all(|&v| v == 0.0)
-            && l.heat_source.constant == 0.0
-            && l.heat_source.rate == 0.0
-            && l.traction
-                .iter()
-                .all(|t| t.constant.iter().chain(&t.rate).all(|&v| v == 0.0));
+        // Zero data in any form (a number, an array, or an affine table of zeros).
+        let zero = |d: &DatumSpec| match d {
+            DatumSpec::Scalar(inner) => {
+                matches!(inner.as_ref(), DatumSpec::Numbers(v) if v.iter().all(|&x| x == 0.0))
+                    || matches!(inner.as_ref(), DatumSpec::Affine(a) if a.constant.iter().chain(&a.rate).all(|&x| x == 0.0))
+            }
+            DatumSpec::Numbers(v) => v.iter().all(|&x| x == 0.0),
+            DatumSpec::Affine(a) => a.constant.iter().chain(&a.rate).all(|&x| x == 0.0),
+            DatumSpec::Expressions(_) => false,
+        };
+        let no_loads = zero(&l.body_force)
+            && zero(&l.heat_source)
+            && l.pressure.is_empty()
+            && l.traction.iter().all(|t| {
+                t.value.as_ref().is_none_or(zero) && t.constant.iter().chain(&t.rate).flatten().all(|&v| v == 0.0)
+            });
+        let structured = scenario.structured().filter(|s| s.lengths.len() == 2);
         let mut neumann = b.neumann.clone();
         neumann.sort();
         // (key, holds, the scenario's value, what the family needs)
         let checks: [(&str, bool, String, &str); 6] = [
             (
                 "geometry.lengths",
-                scenario.dim() == 2,
-                format!("{:?}", scenario.geometry.lengths),
-                "a rectangle (2 lengths)",
+                structured.is_some(),
+                format!("{:?}", scenario.structured().map(|s| s.lengths)),
+                "a structured rectangle (2 lengths)",
             ),
             (
                 "boundary.dirichlet",
@@ -130,10 +136,15 @@ impl Manufactured {
             ),
             (
                 "initial",
-                scenario.initial.velocity.iter().all(|&v| v == 0.0) && scenario.initial.temperature == b.temperature,
+                zero(&scenario.initial.velocity)
+                    && zero(&scenario.initial.displacement)
+                    && scenario.initial.temperature.as_scalar() == Some(b.temperature),
                 format!(
-                    "u₁ = {:?}, θ₀ = {}, θ_D = {}",
-                    scenario.initial.velocity, scenario.initial.temperature, b.temperature
+                    "u₀ = {}, u₁ = {}, θ₀ = {}, θ_D = {}",
+                    scenario.initial.displacement,
+                    scenario.initial.velocity,
+                    scenario.initial.temperature,
+                    b.temperature
                 ),
                 "u₁ = 0 and θ₀ = θ_D (the exact initial data)",
             ),
@@ -151,8 +162,9 @@ impl Manufactured {
                 expected: format!("{expected} for the manufactured solution"),
             });
         }
+        let lengths = structured.map(|s| s.lengths).unwrap_or_default();
         Ok(Manufactured {
-            lengths: [scenario.geometry.lengths[0], scenario.geometry.lengths[1]],
+            lengths: [lengths[0], lengths[1]],
             slip_amplitude: 0.5,
             shear_amplitude: 0.2,
             normal_amplitude: 0.2,
@@ -325,9 +337,8 @@ impl ExtraLoads for Manufactured {
     fn add_force(&self, problem: &Problem, t: f64, force: &mut [f64]) {
         let mesh = &problem.mesh;
         quadrature::vector_body_load(mesh, |x| self.body_force(problem, x, t), force);
-        for name in &problem.scenario.boundary.neumann {
-            let Some(part) = mesh.part_index(name) else { continue };
-            let normal = outward_normal(name);
+        for &part in &problem.parts.neumann {
+            let normal = outward_normal(&mesh.part_names[part]);
             quadrature::vector_boundary_load(
                 mesh,
                 &[part],
@@ -335,26 +346,24 @@ impl ExtraLoads for Manufactured {
                 force,
             );
         }
-        let contact: Vec<usize> = contact_parts(problem);
-        quadrature::vector_boundary_load(mesh, &contact, |x| self.contact_load(problem, x, t), force);
+        quadrature::vector_boundary_load(
+            mesh,
+            &problem.parts.contact,
+            |x| self.contact_load(problem, x, t),
+            force,
+        );
     }
 
     fn add_heat(&self, problem: &Problem, t: f64, heat: &mut [f64]) {
         let mesh = &problem.mesh;
         quadrature::scalar_body_load(mesh, |x| self.heat_source(problem, x, t), heat);
-        let contact = contact_parts(problem);
-        quadrature::scalar_boundary_load(mesh, &contact, |x| self.contact_heat_flux(problem, x, t), heat);
+        quadrature::scalar_boundary_load(
+            mesh,
+            &problem.parts.contact,
+            |x| self.contact_heat_flux(problem, x, t),
+            heat,
+        );
     }
-}
-
-fn contact_parts(problem: &Problem) -> Vec<usize> {
-    problem
-        .scenario
-        .boundary
-        .contact
-        .iter()
-        .filter_map(|n| problem.mesh.part_index(n))
-        .collect()
 }
 
 #[cfg(test)]
@@ -364,7 +373,7 @@ mod tests {
     fn setup() -> (Manufactured, Problem) {
         let scenario = Manufactured::scenario(&[]).unwrap();
         let exact = Manufactured::new(&scenario).unwrap();
-        let problem = Problem::new(&scenario).unwrap();
+        let problem = scenario.build().unwrap();
         (exact, problem)
     }
 

@@ -15,6 +15,7 @@
 use crate::error::Error;
 use crate::fem::simplex::Simplex;
 use crate::problem::Problem;
+use crate::scenario::Structured;
 
 /// The prolongation P from a coarse to a fine rectangle mesh: per fine node, the three coarse
 /// nodes of the coarse triangle holding it and their barycentric weights.
@@ -30,20 +31,22 @@ impl Prolongation {
     /// ones (nested meshes); anything else is an error, since interpolation between non-nested
     /// meshes would add an interpolation error to the measured one.
     pub fn new(coarse: &Problem, fine: &Problem) -> Result<Self, Error> {
-        let (cs, fs) = (&coarse.scenario, &fine.scenario);
-        if coarse.dim() != 2 || fine.dim() != 2 || cs.geometry.lengths != fs.geometry.lengths {
+        let (Some(cs), Some(fs)) = (rectangle_grid(&coarse.mesh), rectangle_grid(&fine.mesh)) else {
+            return Err(not_nested(coarse, fine, "structured rectangle meshes in 2D"));
+        };
+        if cs.lengths != fs.lengths {
             return Err(not_nested(coarse, fine, "the same rectangle in 2D"));
         }
-        let (nx, ny) = (cs.mesh.nx, cs.mesh.ny);
-        let ratio = fs.mesh.nx / nx;
-        if ratio == 0 || fs.mesh.nx != ratio * nx || fs.mesh.ny != ratio * ny {
+        let (nx, ny) = (cs.cells[0], cs.cells[1]);
+        let ratio = fs.cells[0] / nx;
+        if ratio == 0 || fs.cells[0] != ratio * nx || fs.cells[1] != ratio * ny {
             return Err(not_nested(
                 coarse,
                 fine,
                 "fine cell counts that are one integer multiple of the coarse ones",
             ));
         }
-        let (lx, ly) = (cs.geometry.lengths[0], cs.geometry.lengths[1]);
+        let (lx, ly) = (cs.lengths[0], cs.lengths[1]);
         let (dx, dy) = (lx / nx as f64, ly / ny as f64);
         let mesh = &coarse.mesh;
         let rows = fine
@@ -91,12 +94,37 @@ impl Prolongation {
     }
 }
 
+/// The rectangle and cell counts of a mesh made by [`crate::mesh::rectangle`], recognised by
+/// regenerating it; `None` for any other mesh.
+fn rectangle_grid(mesh: &crate::mesh::Mesh) -> Option<Structured> {
+    if mesh.dim != 2 {
+        return None;
+    }
+    let max = |c: usize| mesh.coords.iter().map(|x| x[c]).fold(f64::NEG_INFINITY, f64::max);
+    let (lx, ly) = (max(0), max(1));
+    let nx = mesh.coords.iter().filter(|x| x[1] == 0.0).count().checked_sub(1)?;
+    let ny = (mesh.n_nodes() / (nx + 1)).checked_sub(1)?;
+    if nx == 0 || ny == 0 {
+        return None;
+    }
+    let regenerated = crate::mesh::rectangle(lx, ly, nx, ny);
+    let same = regenerated.cells == mesh.cells
+        && regenerated.n_nodes() == mesh.n_nodes()
+        && regenerated
+            .coords
+            .iter()
+            .zip(&mesh.coords)
+            .all(|(a, b)| (a[0] - b[0]).abs() <= 1e-12 * lx && (a[1] - b[1]).abs() <= 1e-12 * ly);
+    same.then(|| Structured {
+        lengths: vec![lx, ly],
+        cells: vec![nx, ny],
+    })
+}
+
 fn not_nested(coarse: &Problem, fine: &Problem, expected: &str) -> Error {
-    let describe = |p: &Problem| {
-        format!(
-            "{:?} m with {} × {} cells",
-            p.scenario.geometry.lengths, p.scenario.mesh.nx, p.scenario.mesh.ny
-        )
+    let describe = |p: &Problem| match rectangle_grid(&p.mesh) {
+        Some(g) => format!("{:?} m with {} × {} cells", g.lengths, g.cells[0], g.cells[1]),
+        None => format!("an unstructured mesh of {} nodes", p.mesh.n_nodes()),
     };
     Error::InvalidValue {
         key: "mesh".into(),
@@ -112,7 +140,7 @@ mod tests {
 
     fn problem(nx: usize, ny: usize) -> Problem {
         let s = Scenario::load(None, &[format!("mesh.nx={nx}"), format!("mesh.ny={ny}")]).unwrap();
-        Problem::new(&s).unwrap()
+        s.build().unwrap()
     }
 
     /// A coarse P1 field and its prolongation are the same function: the fine nodal values at

@@ -64,14 +64,14 @@ pub fn levels(scenario: &Scenario, n_levels: usize) -> Result<Vec<LevelSpec>, Er
             ),
         });
     }
-    if scenario.dim() != 2 {
+    let Some(grid) = scenario.structured().filter(|g| g.lengths.len() == 2) else {
         return Err(Error::InvalidValue {
-            key: "geometry.lengths".into(),
-            value: format!("{:?}", scenario.geometry.lengths),
-            expected: "a rectangle (2 lengths): the study uses nested rectangle meshes".into(),
+            key: "mesh".into(),
+            value: format!("{:?}", scenario.mesh),
+            expected: "a structured rectangle (2 lengths): the study uses nested rectangle meshes".into(),
         });
-    }
-    let [l1, l2] = [scenario.geometry.lengths[0], scenario.geometry.lengths[1]];
+    };
+    let [l1, l2] = [grid.lengths[0], grid.lengths[1]];
     // n_y = n_x L₂/L₁ = 2^l · (4 L₂/L₁), rounded once so that the levels stay nested.
     let ny_unit = ((l2 / l1) * 4.0).round().max(1.0) as usize;
     Ok((1..=n_levels as u32)
@@ -91,8 +91,7 @@ pub fn levels(scenario: &Scenario, n_levels: usize) -> Result<Vec<LevelSpec>, Er
 /// The scenario of one level: the base with the level's mesh and time step.
 pub fn level_scenario(base: &Scenario, spec: &LevelSpec) -> Result<Scenario, Error> {
     let mut scenario = base.clone();
-    scenario.mesh.nx = spec.nx;
-    scenario.mesh.ny = spec.ny;
+    scenario.set_cells(spec.nx, spec.ny);
     scenario.time.steps = spec.steps;
     scenario.validate()?;
     Ok(scenario)
@@ -158,18 +157,19 @@ pub struct StudyReport {
 /// Runs one level, calling `observe` with every new state, and accounts for it.
 fn run_level(
     spec: &LevelSpec,
+    scenario: &Scenario,
     problem: &Problem,
     mut observe: impl FnMut(&State) -> Result<(), Error>,
 ) -> Result<LevelRun, Error> {
     let clock = Instant::now();
     let system = StepSystem::new(problem)?;
     let (mut outer, mut inner) = (0, 0);
-    let last = time::run(problem, &system, |state, info| {
+    let last = time::run(problem, &system, &scenario.solver_params(), |state, info| {
         outer += info.convexification_iterations;
         inner += info.inner_iterations;
         observe(state)
     })?;
-    let slip_tolerance = problem.scenario.solver.slip_tolerance;
+    let slip_tolerance = scenario.solver.slip_tolerance;
     let slip_nodes_final = time::contact_rows(problem, &last, slip_tolerance)
         .iter()
         .filter(|r| r.slip)
@@ -219,9 +219,9 @@ pub fn self_convergence(
     // 1. The coarse levels, keeping their states at every time level.
     let mut coarse = Vec::with_capacity(coarse_specs.len());
     for spec in coarse_specs {
-        let problem = Problem::new(&level_scenario(base, spec)?)?;
+        let problem = level_scenario(base, spec)?.build()?;
         let mut states = Vec::with_capacity(spec.steps);
-        let run = run_level(spec, &problem, |state| {
+        let run = run_level(spec, base, &problem, |state| {
             states.push(state.clone());
             Ok(())
         })?;
@@ -230,7 +230,7 @@ pub fn self_convergence(
     }
 
     // 2. The reference, measuring each coarse level at the time levels they share.
-    let reference = Problem::new(&level_scenario(base, &reference_spec)?)?;
+    let reference = level_scenario(base, &reference_spec)?.build()?;
     let prolongations = coarse
         .iter()
         .map(|(problem, _, _)| Prolongation::new(problem, &reference))
@@ -241,7 +241,7 @@ pub fn self_convergence(
         .collect();
     let mut own = ErrorHistory::new(reference.time_step());
     let zero = |n: usize| vec![0.0; n];
-    let reference_run = run_level(&reference_spec, &reference, |state| {
+    let reference_run = run_level(&reference_spec, base, &reference, |state| {
         let (nu, nt) = (state.u.len(), state.theta.len());
         own.push(&discrete_errors(&reference, &zero(nu), &zero(nu), &zero(nt), state));
         for (((_, states, run), p), history) in coarse.iter().zip(&prolongations).zip(&mut histories) {
@@ -297,13 +297,13 @@ pub fn manufactured(n_levels: usize, progress: &mut dyn FnMut(&LevelRun)) -> Res
     for (i, spec) in specs.iter().enumerate() {
         let scenario = level_scenario(&base, spec)?;
         let exact = Manufactured::new(&scenario)?;
-        let problem = Problem::with_extra_loads(&scenario, Box::new(exact))?;
+        let problem = scenario.builder()?.extra_loads(Box::new(exact)).build()?;
         let k = problem.time_step();
         let mut history = ErrorHistory::new(k);
         // The exact solution's own norms, on the finest mesh (its quadrature is the most exact).
         let finest = i + 1 == specs.len();
         let mut norms = ErrorHistory::new(k);
-        let run = run_level(spec, &problem, |state| {
+        let run = run_level(spec, &scenario, &problem, |state| {
             let t = state.n as f64 * k;
             history.push(&exact_errors(&problem, state, &exact, t));
             if finest {

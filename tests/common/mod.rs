@@ -1,4 +1,5 @@
-//! Helpers shared by the integration tests.
+//! Helpers shared by the integration tests (each test binary uses some of them).
+#![allow(dead_code)]
 
 use faer::linalg::solvers::Solve;
 use thermocontact::fem::sparse::CscMatrix;
