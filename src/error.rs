@@ -8,6 +8,9 @@ pub enum Error {
     /// A scenario key that does not exist.
     #[error("unknown scenario key `{key}` (expected one of {expected})")]
     UnknownKey { key: String, expected: String },
+    /// A scenario key that no longer exists.
+    #[error("`{key}` is no longer a scenario key: {instead}")]
+    RemovedKey { key: String, instead: String },
     /// A scenario value outside its admissible range or of the wrong type.
     #[error("invalid value for `{key}`: {value} (expected {expected})")]
     InvalidValue {

@@ -214,7 +214,7 @@ impl<'de> Deserialize<'de> for DatumSpec {
                     }
                 }
             }
-            _ => return Err(D::Error::custom(format!("expected {DATUM_FORMS}"))),
+            _ => return Err(D::Error::custom(DATUM_FORMS)),
         };
         Ok(spec)
     }
@@ -309,7 +309,7 @@ impl DatumSpec {
                         Expression::parse(text).map_err(|e| Error::InvalidValue {
                             key: key.to_string(),
                             value: format!("{text:?}"),
-                            expected: e.to_string(),
+                            expected: format!("an expression of x, y, z, t; {e}"),
                         })
                     })
                     .collect::<Result<Vec<_>, _>>()?;
@@ -928,7 +928,7 @@ const DATUM_KEYS: &[&str] = &[
 /// Keys that existed once, with what replaced them.
 const REMOVED_KEYS: &[(&str, &str)] = &[(
     "boundary.contact_normal",
-    "nothing: each contact node's outward normal now comes from the mesh; remove the key",
+    "each contact node's outward normal now comes from the mesh; remove the key",
 )];
 
 /// Lays `user` over `base`, key by key. A key unknown to the base is an error naming its path. A
@@ -945,11 +945,10 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
             format!("{prefix}.{key}")
         };
         if let Some((_, instead)) = REMOVED_KEYS.iter().find(|(removed, _)| *removed == path) {
-            return Err(invalid(
-                &path,
-                &value.to_string(),
-                &format!("no such key any more, {instead}"),
-            ));
+            return Err(Error::RemovedKey {
+                key: path,
+                instead: instead.to_string(),
+            });
         }
         if prefix == "mesh" && base.contains_key("file") && ["nx", "ny", "nz"].contains(&key.as_str()) {
             return Err(invalid(

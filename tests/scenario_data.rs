@@ -1,0 +1,167 @@
+//! Data in a scenario: every datum form gives the same run where it means the same load, and
+//! every input error names the key, exits non-zero and writes nothing.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use thermocontact::Scenario;
+
+fn coarse(overrides: &[&str]) -> Result<Scenario, thermocontact::Error> {
+    let mut all: Vec<String> = ["mesh.nx=16", "mesh.ny=4", "time.steps=16"].map(String::from).to_vec();
+    all.extend(overrides.iter().map(|s| s.to_string()));
+    Scenario::load(None, &all)
+}
+
+fn final_u(scenario: &Scenario) -> Vec<f64> {
+    scenario.run_quiet().unwrap().1.u
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
+/// The top traction (0, −800 t) written as the affine table, as expressions, and as a normal
+/// pressure 800 t on the top (ν = (0, 1), traction −p ν) gives one run.
+#[test]
+fn affine_expression_and_pressure_forms_of_one_load_give_one_run() {
+    let affine = coarse(&[]).unwrap();
+    let expression =
+        coarse(&[r#"loads.traction=[{part="top", value=["0", "-800*t"]}, {part="right", value=[0, 0]}]"#]).unwrap();
+    let pressure = Scenario::load(
+        Some(
+            r#"
+[mesh]
+nx = 16
+ny = 4
+[time]
+steps = 16
+[[loads.traction]]
+part = "right"
+value = [0.0, 0.0]
+[[loads.pressure]]
+part = "top"
+value = "800*t"
+"#,
+        ),
+        &[],
+    )
+    .unwrap();
+    let u = final_u(&affine);
+    let scale = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(scale > 0.0);
+    for (name, other) in [("expressions", &expression), ("pressure", &pressure)] {
+        let d = max_diff(&u, &final_u(other));
+        assert!(d <= 1e-12 * scale, "{name}: differs by {d:e}");
+    }
+    // A body force that depends on x changes the run (the expression is really evaluated).
+    let varying = coarse(&[r#"loads.body_force=["0", "-10*x/20"]"#]).unwrap();
+    assert!(max_diff(&u, &final_u(&varying)) > 1e-6 * scale);
+}
+
+/// Initial data as expressions: u₁ must lie in E^h (zero on Γ_D, tangential on Γ_C).
+#[test]
+fn initial_data_as_expressions_are_checked_against_the_constraints() {
+    let s = coarse(&[
+        r#"initial.temperature="25 + x/40""#,
+        r#"initial.velocity=["0.01*x/40", "0"]"#,
+    ])
+    .unwrap();
+    let (_, last) = s.run_quiet().unwrap();
+    assert_eq!(last.n, 16);
+    let e = coarse(&[r#"initial.velocity=["0.01", "0"]"#])
+        .unwrap()
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("initial.velocity") && e.contains("Γ_D"), "{e}");
+    let e = coarse(&[r#"initial.velocity=["0", "0.01*x"]"#])
+        .unwrap()
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("initial.velocity") && e.contains("normal"), "{e}");
+}
+
+/// Every bad datum is refused when the scenario is read, naming the key.
+#[test]
+fn bad_data_name_their_key() {
+    let cases: [(&str, &str); 7] = [
+        (r#"loads.body_force=["0", "-10*"]"#, "loads.body_force"),
+        (r#"loads.body_force=["0", "q*t"]"#, "loads.body_force"),
+        (r#"loads.body_force=[0, 0, 1]"#, "loads.body_force"),
+        (r#"loads.heat_source=true"#, "loads.heat_source"),
+        (r#"loads.traction=[{part="top", value="800*t"}]"#, "loads.traction[0]"),
+        (
+            r#"loads.pressure=[{part="bottom", value="1"}]"#,
+            "loads.pressure[0].part",
+        ),
+        (r#"initial.temperature=["1", "2"]"#, "initial.temperature"),
+    ];
+    for (set, key) in cases {
+        let e = coarse(&[set]).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains(key), "{set}: {e}");
+    }
+    // Non-finite values show up where they are evaluated, named by the key and the point.
+    let s = coarse(&[r#"loads.body_force=["0", "1/(x-20)"]"#]).unwrap();
+    let e = s.run_quiet().map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("loads.body_force") && e.contains("not finite"), "{e}");
+}
+
+/// Old keys and geometry beside a mesh file get messages that say what to do.
+#[test]
+fn removed_and_conflicting_mesh_keys_are_explained() {
+    let e = coarse(&["boundary.contact_normal=[0.0, -1.0]"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("boundary.contact_normal") && e.contains("from the mesh"),
+        "{e}"
+    );
+    let e = Scenario::load(Some("[mesh]\nfile = \"part.msh\"\nnx = 4\n"), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("mesh.nx") && e.contains("mesh.file"), "{e}");
+    let e = Scenario::load(Some("[mesh]\nfile = \"/nonexistent/part.msh\"\n"), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("/nonexistent/part.msh"), "{e}");
+    let e = coarse(&[r#"boundary.contact=["bottom", "middle"]"#])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("boundary.contact") && e.contains("middle") && e.contains("\"top\""),
+        "{e}"
+    );
+}
+
+/// Γ_D may be empty: the paper's example held by friction alone still runs.
+#[test]
+fn an_empty_dirichlet_boundary_is_accepted() {
+    let s = coarse(&["boundary.dirichlet=[]", r#"boundary.neumann=["top", "right", "left"]"#]).unwrap();
+    let (summary, last) = s.run_quiet().unwrap();
+    assert_eq!(last.n, 16);
+    assert!(summary.outputs.iter().all(|o| o.slip_nodes + o.stick_nodes == 17));
+}
+
+/// An input error on the command line exits non-zero, names the key and writes nothing.
+#[test]
+fn command_line_input_errors_write_nothing() {
+    let out = std::env::temp_dir().join(format!("thermocontact-data-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    for set in [
+        r#"loads.body_force=["0", "-10*"]"#,
+        "boundary.contact_normal=[0.0, 1.0]",
+        r#"boundary.contact=["nowhere"]"#,
+    ] {
+        let result = Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+            .args(["run", "--quiet", "--set", set, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(!result.status.success(), "{set}");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        let key = set.split('=').next().unwrap();
+        assert!(stderr.contains(key), "{set}: {stderr}");
+        assert!(!PathBuf::from(&out).exists(), "{set}: output written");
+    }
+}
