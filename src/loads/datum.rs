@@ -33,7 +33,10 @@ impl Datum {
 
     /// One expression per component.
     pub fn expressions<S: AsRef<str>>(texts: &[S]) -> Result<Datum, ExpressionError> {
-        let parsed = texts.iter().map(|t| Expression::parse(t.as_ref())).collect::<Result<_, _>>()?;
+        let parsed = texts
+            .iter()
+            .map(|t| Expression::parse(t.as_ref()))
+            .collect::<Result<_, _>>()?;
         Ok(Datum::Expressions(parsed))
     }
 

@@ -8,15 +8,17 @@
 //!
 //! | crate | version | ns/eval | ns/eval `800*t` | maintained | fit |
 //! |---|---|---|---|---|---|
-//! | exmex | 0.21.0 | 98 | 28 | yes: releases since 2021, the latest on 2025–26 dependencies; MIT OR Apache-2.0 | all functions; values on the stack (no allocation) up to 32 nodes; `Send + Sync` |
+//! | exmex | 0.21.0 | 98 | 28 | yes: 21 minor releases, the latest built on current dependencies (rand 0.10, toml 1.1); MIT OR Apache-2.0 | all functions; values on the stack (no allocation) up to 32 nodes; `Send + Sync` |
 //! | mathexpr | 0.1.1 | 73 | 19 | young (two 0.1 releases, one author); MIT | a `Vec` allocated per evaluation; `x/0` is an error, not ±∞; math through `libm` |
 //! | fasteval | 0.2.4 | 122 | 9 | no: last release January 2020 | no `sqrt` (a named callback per evaluation), `log` is base 10, `pi()` |
 //! | meval | 0.2.0 | 136 | 41 | no: last release 2018; its `nom` 1 is flagged for future rejection by rustc | — |
 //! | evalexpr | 13.1.0 | 900 | 310 | yes, but AGPL-3.0-only since 12 (we are MIT OR Apache-2.0) | functions are `math::sqrt`, … |
 //!
 //! exmex is chosen: maintained, licensed like us, allocation-free, thread-safe, and within 35 %
-//! of the fastest candidate. Speed matters less than it seems: a load whose datum does not
-//! depend on x is never evaluated at quadrature points ([`super::Load`]).
+//! of the fastest candidate. Through [`Expression`], which writes the square of a variable as a
+//! product (exmex's `^` is `powf`), the first expression takes 55 ns and `800*t` 27 ns
+//! (`cargo run --release --example expression_bench`). Speed matters less than it seems: a load
+//! whose datum does not depend on x is never evaluated at quadrature points ([`super::Load`]).
 //!
 //! ## Why our own grammar in front of it
 //!
@@ -244,6 +246,12 @@ impl Node {
             Node::Number(v) => format!("{v:?}"),
             Node::Variable(k) => VARIABLES[*k].to_string(),
             Node::Negate(a) => format!("(-({}))", a.canonical()),
+            // exmex's `^` is `powf`; a square of a variable is a product, as fast as Rust's and
+            // as exact (both are x² correctly rounded).
+            Node::Binary('^', a, b) if matches!(**a, Node::Variable(_)) && matches!(**b, Node::Number(2.0)) => {
+                let x = a.canonical();
+                format!("({x} * {x})")
+            }
             Node::Binary(op, a, b) => format!("(({}) {op} ({}))", a.canonical(), b.canonical()),
             Node::Call(f, args) => {
                 let name = FUNCTIONS[*f].1;
@@ -463,13 +471,21 @@ impl<'a> Parser<'a> {
                 let called = self.peek() == Token::Symbol('(');
                 if let Some(k) = VARIABLES.iter().position(|v| *v == name) {
                     if called {
-                        return Err(parse_error(self.text, at, &format!("`{name}` is a variable, not a function")));
+                        return Err(parse_error(
+                            self.text,
+                            at,
+                            &format!("`{name}` is a variable, not a function"),
+                        ));
                     }
                     return Ok(Node::Variable(k));
                 }
                 if let Some((_, value)) = CONSTANTS.iter().find(|(c, _)| *c == name) {
                     if called {
-                        return Err(parse_error(self.text, at, &format!("`{name}` is a constant, not a function")));
+                        return Err(parse_error(
+                            self.text,
+                            at,
+                            &format!("`{name}` is a constant, not a function"),
+                        ));
                     }
                     return Ok(Node::Number(*value));
                 }
@@ -545,10 +561,16 @@ mod tests {
 
     #[test]
     fn expressions_agree_with_rust() {
-        let points = [([0.3, -1.7, 2.2], 0.7), ([4.0, 0.5, -0.25], 2.5), ([-2.0, 3.0, 1.0], 0.0)];
+        let points = [
+            ([0.3, -1.7, 2.2], 0.7),
+            ([4.0, 0.5, -0.25], 2.5),
+            ([-2.0, 3.0, 1.0], 0.0),
+        ];
         type Reference = fn([f64; 3], f64) -> f64;
         let cases: [(&str, Reference); 14] = [
-            ("-20*t*y/sqrt(x^2+y^2)", |x, t| -20.0 * t * x[1] / (x[0] * x[0] + x[1] * x[1]).sqrt()),
+            ("-20*t*y/sqrt(x^2+y^2)", |x, t| {
+                -20.0 * t * x[1] / (x[0] * x[0] + x[1] * x[1]).sqrt()
+            }),
             ("800*t", |_, t| 800.0 * t),
             ("-x^2", |x, _| -(x[0] * x[0])),
             ("exp(-x^2)", |x, _| (-(x[0] * x[0])).exp()),
@@ -557,11 +579,15 @@ mod tests {
             ("x - y - z", |x, _| x[0] - x[1] - x[2]),
             ("x / y / 2", |x, _| x[0] / x[1] / 2.0),
             ("-x*y + -(z)", |x, _| -x[0] * x[1] - x[2]),
-            ("min(x, y) * max(z, 1e-3) + abs(y)", |x, _| x[0].min(x[1]) * x[2].max(1e-3) + x[1].abs()),
+            ("min(x, y) * max(z, 1e-3) + abs(y)", |x, _| {
+                x[0].min(x[1]) * x[2].max(1e-3) + x[1].abs()
+            }),
             ("sin(pi*x) + cos(y)*tan(0.1*z)", |x, _| {
                 (std::f64::consts::PI * x[0]).sin() + x[1].cos() * (0.1 * x[2]).tan()
             }),
-            ("log(e) + ln(abs(x)+1) + log10(100)", |x, _| 1.0 + (x[0].abs() + 1.0).ln() + 2.0),
+            ("log(e) + ln(abs(x)+1) + log10(100)", |x, _| {
+                1.0 + (x[0].abs() + 1.0).ln() + 2.0
+            }),
             ("atan2(y, x) + 1.5E+2 + .5", |x, _| x[1].atan2(x[0]) + 150.5),
             ("x**2 + 2*t", |x, t| x[0] * x[0] + 2.0 * t),
         ];
@@ -616,7 +642,9 @@ mod tests {
     #[test]
     fn unknown_function_is_named() {
         let err = Expression::parse("1 + foo(x)").unwrap_err();
-        assert!(matches!(&err, ExpressionError::UnknownFunction { text, name } if text == "1 + foo(x)" && name == "foo"));
+        assert!(
+            matches!(&err, ExpressionError::UnknownFunction { text, name } if text == "1 + foo(x)" && name == "foo")
+        );
         assert!(err.to_string().contains("sqrt"));
     }
 
@@ -646,8 +674,18 @@ mod tests {
     #[test]
     fn arity_is_checked() {
         let err = Expression::parse("min(1, 2, x)").unwrap_err();
-        assert!(matches!(err, ExpressionError::Arity { expected: 2, found: 3, .. }));
-        assert!(matches!(Expression::parse("sqrt(x, y)"), Err(ExpressionError::Arity { .. })));
+        assert!(matches!(
+            err,
+            ExpressionError::Arity {
+                expected: 2,
+                found: 3,
+                ..
+            }
+        ));
+        assert!(matches!(
+            Expression::parse("sqrt(x, y)"),
+            Err(ExpressionError::Arity { .. })
+        ));
     }
 
     #[test]

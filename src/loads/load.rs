@@ -208,7 +208,11 @@ impl Load {
         let rule = elements.rule;
         let mut f = [0.0; 3];
         for (k, &id) in elements.ids.iter().enumerate() {
-            let nodes = if elements.on_facets { mesh.facet(id) } else { mesh.cell(id) };
+            let nodes = if elements.on_facets {
+                mesh.facet(id)
+            } else {
+                mesh.cell(id)
+            };
             let weight = elements.measures[k] * rule.weight;
             for bary in rule.points {
                 let mut x = [0.0; 3];
@@ -464,7 +468,11 @@ mod tests {
             let got = at(&l, &mesh, 3.0);
             let volume = mesh.volume();
             for (total, fc) in totals(&got, mesh.dim).iter().zip(&f) {
-                assert!((total - fc * volume).abs() < 1e-12 * volume, "{total} vs {}", fc * volume);
+                assert!(
+                    (total - fc * volume).abs() < 1e-12 * volume,
+                    "{total} vs {}",
+                    fc * volume
+                );
             }
             assert_close(&got, &assembly::body_load(&mesh, &f), 1e-15);
         }
@@ -482,13 +490,21 @@ mod tests {
         let mesh = rectangle(40.0, 10.0, 8, 3);
         let parts = vec![part(&mesh, "top"), part(&mesh, "right")];
         let f = [0.0, -3.0];
-        let l = load(&mesh, LoadKind::Traction { parts: parts.clone() }, Datum::constant(f.to_vec()));
+        let l = load(
+            &mesh,
+            LoadKind::Traction { parts: parts.clone() },
+            Datum::constant(f.to_vec()),
+        );
         assert_close(&at(&l, &mesh, 1.0), &assembly::traction_load(&mesh, &parts, &f), 1e-15);
 
         let mesh = cuboid([2.0, 1.0, 3.0], [2, 3, 2]);
         let parts = vec![part(&mesh, "z+")];
         let f = [1.0, 2.0, -3.0];
-        let l = load(&mesh, LoadKind::Traction { parts: parts.clone() }, Datum::constant(f.to_vec()));
+        let l = load(
+            &mesh,
+            LoadKind::Traction { parts: parts.clone() },
+            Datum::constant(f.to_vec()),
+        );
         assert_close(&at(&l, &mesh, 1.0), &assembly::traction_load(&mesh, &parts, &f), 1e-15);
     }
 
@@ -498,8 +514,18 @@ mod tests {
         let t = 0.7;
         let top = vec![part(&mesh, "top")];
         let cases = [
-            (LoadKind::BodyForce, vec![3.0, -1.0], vec![2.0, 0.5], vec!["3+2*t", "-1+0.5*t"]),
-            (LoadKind::Traction { parts: top.clone() }, vec![3.0, 0.0], vec![2.0, 1.0], vec!["3+2*t", "t"]),
+            (
+                LoadKind::BodyForce,
+                vec![3.0, -1.0],
+                vec![2.0, 0.5],
+                vec!["3+2*t", "-1+0.5*t"],
+            ),
+            (
+                LoadKind::Traction { parts: top.clone() },
+                vec![3.0, 0.0],
+                vec![2.0, 1.0],
+                vec!["3+2*t", "t"],
+            ),
             (LoadKind::Pressure { parts: top }, vec![3.0], vec![2.0], vec!["3+2*t"]),
             (LoadKind::HeatSource, vec![3.0], vec![2.0], vec!["3+2*t"]),
         ];
@@ -545,14 +571,26 @@ mod tests {
         assert_close(&got, &exact_p1_load(&mesh, |x| x[0]), 1e-14);
 
         // Vector, time-dependent: ∫ (x t, 2y − 1) = (t lx² ly / 2, lx ly² − lx ly).
-        let f = load(&mesh, LoadKind::BodyForce, Datum::expressions(&["x*t", "2*y - 1"]).unwrap());
+        let f = load(
+            &mesh,
+            LoadKind::BodyForce,
+            Datum::expressions(&["x*t", "2*y - 1"]).unwrap(),
+        );
         let sums = totals(&at(&f, &mesh, 0.5), 2);
         assert!((sums[0] - 0.5 * lx * lx * ly / 2.0).abs() < 1e-10);
         assert!((sums[1] - (lx * ly * ly - lx * ly)).abs() < 1e-10);
 
         let mesh = cuboid([2.0, 1.0, 3.0], [2, 3, 2]);
-        let g = load(&mesh, LoadKind::HeatSource, Datum::expression("x + 2*y - z + 1").unwrap());
-        assert_close(&at(&g, &mesh, 0.0), &exact_p1_load(&mesh, |x| x[0] + 2.0 * x[1] - x[2] + 1.0), 1e-14);
+        let g = load(
+            &mesh,
+            LoadKind::HeatSource,
+            Datum::expression("x + 2*y - z + 1").unwrap(),
+        );
+        assert_close(
+            &at(&g, &mesh, 0.0),
+            &exact_p1_load(&mesh, |x| x[0] + 2.0 * x[1] - x[2] + 1.0),
+            1e-14,
+        );
     }
 
     #[test]
@@ -573,7 +611,11 @@ mod tests {
         let (lx, p) = (40.0, 5.0);
         let mesh = rectangle(lx, 10.0, 8, 3);
         let top = vec![part(&mesh, "top")];
-        let exact = at(&load(&mesh, LoadKind::Pressure { parts: top.clone() }, Datum::scalar(p)), &mesh, 0.0);
+        let exact = at(
+            &load(&mesh, LoadKind::Pressure { parts: top.clone() }, Datum::scalar(p)),
+            &mesh,
+            0.0,
+        );
         let sums = totals(&exact, 2);
         assert!(sums[0].abs() < 1e-12 && (sums[1] + p * lx).abs() < 1e-12, "{sums:?}");
         // −p ν ℓ_p node by node.
@@ -589,7 +631,15 @@ mod tests {
         let (lx, ly, ny) = (40.0, 10.0, 5);
         let mesh = rectangle(lx, ly, 4, ny);
         let right = vec![part(&mesh, "right")];
-        let got = at(&load(&mesh, LoadKind::Pressure { parts: right }, Datum::expression("y").unwrap()), &mesh, 0.0);
+        let got = at(
+            &load(
+                &mesh,
+                LoadKind::Pressure { parts: right },
+                Datum::expression("y").unwrap(),
+            ),
+            &mesh,
+            0.0,
+        );
         let h = ly / ny as f64;
         for (p, x) in mesh.coords.iter().enumerate() {
             let expected = if x[0] < lx {
@@ -601,7 +651,11 @@ mod tests {
             } else {
                 -h * x[1]
             };
-            assert!((got[2 * p] - expected).abs() < 1e-12, "node {p} at {x:?}: {} vs {expected}", got[2 * p]);
+            assert!(
+                (got[2 * p] - expected).abs() < 1e-12,
+                "node {p} at {x:?}: {} vs {expected}",
+                got[2 * p]
+            );
             assert!(got[2 * p + 1].abs() < 1e-12);
         }
         assert!((totals(&got, 2)[0] + ly * ly / 2.0).abs() < 1e-12);
@@ -611,7 +665,13 @@ mod tests {
     fn non_finite_values_name_the_label_and_the_point() {
         // Nodes (and vertical edges) at x = 20: the edge midpoints hit the pole.
         let mesh = rectangle(40.0, 10.0, 4, 2);
-        let g = Load::new(&mesh, LoadKind::HeatSource, Datum::expression("t/(x-20)").unwrap(), "g".into()).unwrap();
+        let g = Load::new(
+            &mesh,
+            LoadKind::HeatSource,
+            Datum::expression("t/(x-20)").unwrap(),
+            "g".into(),
+        )
+        .unwrap();
         match g.add_to(&mesh, 1.0, &mut vec![0.0; mesh.n_nodes()]) {
             Err(LoadError::NotFinite { label, x, t, value }) => {
                 assert_eq!(label, "g");
@@ -621,9 +681,17 @@ mod tests {
             other => panic!("expected NotFinite, got {other:?}"),
         }
         // Without t the load is integrated at construction, which reports it.
-        let err = Load::new(&mesh, LoadKind::HeatSource, Datum::expression("1/(x-20)").unwrap(), "g".into())
-            .unwrap_err();
-        assert!(err.to_string().contains("`g`") && err.to_string().contains("20"), "{err}");
+        let err = Load::new(
+            &mesh,
+            LoadKind::HeatSource,
+            Datum::expression("1/(x-20)").unwrap(),
+            "g".into(),
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("`g`") && err.to_string().contains("20"),
+            "{err}"
+        );
         let err = Load::new(
             &mesh,
             LoadKind::BodyForce,
@@ -633,7 +701,13 @@ mod tests {
         .unwrap_err();
         assert!(matches!(err, LoadError::NotFinite { ref label, value, .. } if label == "gravity" && value.is_nan()));
         // A t-only datum that blows up at some t.
-        let s = Load::new(&mesh, LoadKind::HeatSource, Datum::expression("1/(t-2)").unwrap(), "s".into()).unwrap();
+        let s = Load::new(
+            &mesh,
+            LoadKind::HeatSource,
+            Datum::expression("1/(t-2)").unwrap(),
+            "s".into(),
+        )
+        .unwrap();
         assert!(s.add_to(&mesh, 1.0, &mut vec![0.0; mesh.n_nodes()]).is_ok());
         assert!(matches!(
             s.add_to(&mesh, 2.0, &mut vec![0.0; mesh.n_nodes()]),
@@ -659,12 +733,48 @@ mod tests {
         );
         assert!(err.to_string().contains("`f0`"));
         let top = vec![part(&mesh, "top")];
-        let err = Load::new(&mesh, LoadKind::Pressure { parts: top.clone() }, Datum::constant(vec![1.0, 2.0]), "p".into());
-        assert!(matches!(err, Err(LoadError::ComponentCount { expected: 1, found: 2, .. })));
-        let err = Load::new(&mesh, LoadKind::Traction { parts: top }, Datum::affine(vec![1.0, 2.0], vec![1.0]), "f2".into());
-        assert!(matches!(err, Err(LoadError::AffineLengths { constant: 2, rate: 1, .. })));
-        let err = Load::new(&mesh, LoadKind::Traction { parts: vec![7] }, Datum::constant(vec![0.0, 1.0]), "f2".into());
-        assert!(matches!(err, Err(LoadError::UnknownPart { part: 7, n_parts: 4, .. })));
+        let err = Load::new(
+            &mesh,
+            LoadKind::Pressure { parts: top.clone() },
+            Datum::constant(vec![1.0, 2.0]),
+            "p".into(),
+        );
+        assert!(matches!(
+            err,
+            Err(LoadError::ComponentCount {
+                expected: 1,
+                found: 2,
+                ..
+            })
+        ));
+        let err = Load::new(
+            &mesh,
+            LoadKind::Traction { parts: top },
+            Datum::affine(vec![1.0, 2.0], vec![1.0]),
+            "f2".into(),
+        );
+        assert!(matches!(
+            err,
+            Err(LoadError::AffineLengths {
+                constant: 2,
+                rate: 1,
+                ..
+            })
+        ));
+        let err = Load::new(
+            &mesh,
+            LoadKind::Traction { parts: vec![7] },
+            Datum::constant(vec![0.0, 1.0]),
+            "f2".into(),
+        );
+        assert!(matches!(
+            err,
+            Err(LoadError::UnknownPart {
+                part: 7,
+                n_parts: 4,
+                ..
+            })
+        ));
     }
 
     #[test]
@@ -672,7 +782,14 @@ mod tests {
         let mesh = rectangle(4.0, 1.0, 2, 1);
         let g = load(&mesh, LoadKind::HeatSource, Datum::scalar(1.0));
         let err = g.add_to(&mesh, 0.0, &mut vec![0.0; 2 * mesh.n_nodes()]).unwrap_err();
-        assert!(matches!(err, LoadError::OutputLength { expected: 6, found: 12, .. }));
+        assert!(matches!(
+            err,
+            LoadError::OutputLength {
+                expected: 6,
+                found: 12,
+                ..
+            }
+        ));
     }
 
     #[test]

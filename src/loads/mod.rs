@@ -39,11 +39,7 @@ pub enum LoadError {
     },
     /// A boundary part index the mesh does not have.
     #[error("`{label}` is applied on boundary part {part}, but the mesh has {n_parts} parts")]
-    UnknownPart {
-        label: String,
-        part: usize,
-        n_parts: usize,
-    },
+    UnknownPart { label: String, part: usize, n_parts: usize },
     /// The datum is NaN or infinite somewhere it is evaluated.
     #[error("`{label}` is not finite at x = {x:?}, t = {t}: {value}")]
     NotFinite {

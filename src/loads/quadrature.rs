@@ -76,12 +76,13 @@ mod tests {
                     if b < n {
                         alpha[b] += 1;
                     }
-                    let monomial = |q: &[f64; 4]| {
-                        (if a < n { q[a] } else { 1.0 }) * (if b < n { q[b] } else { 1.0 })
-                    };
+                    let monomial = |q: &[f64; 4]| (if a < n { q[a] } else { 1.0 }) * (if b < n { q[b] } else { 1.0 });
                     let approx: f64 = rule.points.iter().map(|q| rule.weight * monomial(q)).sum();
                     let exact = exact_moment(&alpha);
-                    assert!((approx - exact).abs() < 1e-15, "n = {n}, a = {a}, b = {b}: {approx} vs {exact}");
+                    assert!(
+                        (approx - exact).abs() < 1e-15,
+                        "n = {n}, a = {a}, b = {b}: {approx} vs {exact}"
+                    );
                 }
             }
         }
