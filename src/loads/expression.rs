@@ -8,15 +8,17 @@
 //!
 //! | crate | version | ns/eval | ns/eval `800*t` | maintained | fit |
 //! |---|---|---|---|---|---|
-//! | exmex | 0.21.0 | 98 | 28 | yes: releases since 2021, the latest on 2025–26 dependencies; MIT OR Apache-2.0 | all functions; values on the stack (no allocation) up to 32 nodes; `Send + Sync` |
+//! | exmex | 0.21.0 | 98 | 28 | yes: 21 minor releases, the latest built on current dependencies (rand 0.10, toml 1.1); MIT OR Apache-2.0 | all functions; values on the stack (no allocation) up to 32 nodes; `Send + Sync` |
 //! | mathexpr | 0.1.1 | 73 | 19 | young (two 0.1 releases, one author); MIT | a `Vec` allocated per evaluation; `x/0` is an error, not ±∞; math through `libm` |
 //! | fasteval | 0.2.4 | 122 | 9 | no: last release January 2020 | no `sqrt` (a named callback per evaluation), `log` is base 10, `pi()` |
 //! | meval | 0.2.0 | 136 | 41 | no: last release 2018; its `nom` 1 is flagged for future rejection by rustc | — |
 //! | evalexpr | 13.1.0 | 900 | 310 | yes, but AGPL-3.0-only since 12 (we are MIT OR Apache-2.0) | functions are `math::sqrt`, … |
 //!
 //! exmex is chosen: maintained, licensed like us, allocation-free, thread-safe, and within 35 %
-//! of the fastest candidate. Speed matters less than it seems: a load whose datum does not
-//! depend on x is never evaluated at quadrature points ([`super::Load`]).
+//! of the fastest candidate. Through [`Expression`], which writes the square of a variable as a
+//! product (exmex's `^` is `powf`), the first expression takes 55 ns and `800*t` 27 ns
+//! (`cargo run --release --example expression_bench`). Speed matters less than it seems: a load
+//! whose datum does not depend on x is never evaluated at quadrature points ([`super::Load`]).
 //!
 //! ## Why our own grammar in front of it
 //!
@@ -244,6 +246,12 @@ impl Node {
             Node::Number(v) => format!("{v:?}"),
             Node::Variable(k) => VARIABLES[*k].to_string(),
             Node::Negate(a) => format!("(-({}))", a.canonical()),
+            // exmex's `^` is `powf`; a square of a variable is a product, as fast as Rust's and
+            // as exact (both are x² correctly rounded).
+            Node::Binary('^', a, b) if matches!(**a, Node::Variable(_)) && matches!(**b, Node::Number(2.0)) => {
+                let x = a.canonical();
+                format!("({x} * {x})")
+            }
             Node::Binary(op, a, b) => format!("(({}) {op} ({}))", a.canonical(), b.canonical()),
             Node::Call(f, args) => {
                 let name = FUNCTIONS[*f].1;
