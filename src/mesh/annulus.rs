@@ -45,16 +45,15 @@ pub fn annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: 
         facets.extend_from_slice(&[node(n_radial, j), node(n_radial, j + 1)]);
         facet_parts.push(1);
     }
-    let mut mesh = Mesh {
-        dim: 2,
+    Mesh::new(
+        2,
         coords,
         cells,
         facets,
         facet_parts,
-        part_names: annulus_part_names().iter().map(|s| s.to_string()).collect(),
-    };
-    super::topology::orient_facets_outward(&mut mesh);
-    mesh
+        annulus_part_names().iter().map(|s| s.to_string()).collect(),
+    )
+    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]

@@ -99,16 +99,15 @@ pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
             }
         }
     }
-    let mut mesh = Mesh {
-        dim: 3,
+    Mesh::new(
+        3,
         coords,
-        cells: tets,
+        tets,
         facets,
         facet_parts,
-        part_names: cuboid_part_names().iter().map(|s| s.to_string()).collect(),
-    };
-    super::topology::orient_facets_outward(&mut mesh);
-    mesh
+        cuboid_part_names().iter().map(|s| s.to_string()).collect(),
+    )
+    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]

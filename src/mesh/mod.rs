@@ -4,17 +4,23 @@
 //! boundary facets (edges in 2D, triangles in 3D) carry the index of a named part (`left`,
 //! `bottom`, …); a scenario maps parts to Γ_D, Γ_N and Γ_C (and to symmetry planes).
 //!
-//! Generators: [`rectangle`] (triangles, parts `left`, `right`, `bottom`, `top`) and [`cuboid`]
+//! Generators: [`rectangle`] (triangles, parts `left`, `right`, `bottom`, `top`), [`cuboid`]
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
-//! `z+`).
+//! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`). Files: [`read_msh`] reads Gmsh
+//! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
+//! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`].
 
 mod annulus;
+mod check;
 mod cuboid;
+mod gmsh;
 mod structured;
 pub(crate) mod topology;
 
 pub use annulus::{annulus, annulus_part_names};
+pub use check::MeshError;
 pub use cuboid::{cuboid, cuboid_part_names};
+pub use gmsh::{msh_text, read_msh};
 pub use structured::{rectangle, rectangle_part_names};
 
 /// A P1 simplicial mesh in d = 2 or 3 dimensions.
@@ -163,12 +169,4 @@ impl Mesh {
             .map(|e| crate::fem::simplex::Simplex::new(self.dim, &self.cell_coords(e)).measure)
             .sum()
     }
-}
-
-// TEMP STUB until the gmsh branch lands.
-#[derive(Debug, thiserror::Error)]
-#[error("mesh error {0}")]
-pub struct MeshError(pub String);
-pub fn read_msh(path: &std::path::Path) -> Result<Mesh, MeshError> {
-    Err(MeshError(path.display().to_string()))
 }

@@ -48,16 +48,15 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
         push(node(i, 0), node(i + 1, 0), 2);
         push(node(i, ny), node(i + 1, ny), 3);
     }
-    let mut mesh = Mesh {
-        dim: 2,
+    Mesh::new(
+        2,
         coords,
         cells,
         facets,
         facet_parts,
-        part_names: rectangle_part_names().iter().map(|s| s.to_string()).collect(),
-    };
-    super::topology::orient_facets_outward(&mut mesh);
-    mesh
+        rectangle_part_names().iter().map(|s| s.to_string()).collect(),
+    )
+    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]

@@ -1,11 +1,25 @@
-//! Facet–cell incidence: which cell a boundary facet closes, and the outward orientation of the
-//! boundary facets that every normal in the code relies on.
+//! Facet–cell incidence: which cells a facet bounds, the checks that a mesh is a conforming,
+//! untangled simplicial complex, and the outward orientation of the boundary facets that every
+//! normal in the code relies on.
+//!
+//! The incidence is one sorted list of every cell face (its sorted nodes, the cell, the vertex
+//! opposite the face): O(N log N) time and a few words per face, rather than a hash map of
+//! vectors, so that meshes of 10⁶ cells check in about a second.
 
-use std::collections::HashMap;
+use rayon::prelude::*;
 
-use super::Mesh;
+use super::{Mesh, MeshError};
 
-/// The sorted node indices of a facet: the key under which cells and facets meet.
+/// A cell face: its sorted nodes (unused slots of 2D edges are `usize::MAX` so that keys of one
+/// mesh compare), the cell, and the cell's vertex opposite the face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) struct Face {
+    pub key: [usize; 3],
+    pub cell: usize,
+    pub opposite: usize,
+}
+
+/// The sorted nodes of a facet: the key under which cells and facets meet.
 pub(crate) fn facet_key(nodes: &[usize]) -> [usize; 3] {
     let mut key = [usize::MAX; 3];
     key[..nodes.len()].copy_from_slice(nodes);
@@ -13,28 +27,89 @@ pub(crate) fn facet_key(nodes: &[usize]) -> [usize; 3] {
     key
 }
 
-/// For every facet of every cell: the cells it bounds and, per cell, the vertex opposite to it.
-pub(crate) fn cell_facets(mesh: &Mesh) -> HashMap<[usize; 3], Vec<(usize, usize)>> {
+/// Every face of every cell, sorted by key (faces shared by two cells are adjacent).
+pub(crate) fn cell_faces(mesh: &Mesh) -> Vec<Face> {
     let npc = mesh.nodes_per_cell();
-    let mut map: HashMap<[usize; 3], Vec<(usize, usize)>> = HashMap::with_capacity(mesh.n_cells() * npc / 2 + 1);
-    for e in 0..mesh.n_cells() {
-        let cell = mesh.cell(e);
-        for skip in 0..npc {
-            let nodes: Vec<usize> = (0..npc).filter(|&a| a != skip).map(|a| cell[a]).collect();
-            map.entry(facet_key(&nodes)).or_default().push((e, cell[skip]));
-        }
-    }
-    map
+    let mut faces: Vec<Face> = (0..mesh.n_cells())
+        .into_par_iter()
+        .flat_map_iter(|e| {
+            let cell = mesh.cell(e);
+            (0..npc).map(move |skip| {
+                let mut nodes = [usize::MAX; 3];
+                let mut k = 0;
+                for (a, &p) in cell.iter().enumerate() {
+                    if a != skip {
+                        nodes[k] = p;
+                        k += 1;
+                    }
+                }
+                Face {
+                    key: facet_key(&nodes[..npc - 1]),
+                    cell: e,
+                    opposite: cell[skip],
+                }
+            })
+        })
+        .collect();
+    faces.par_sort_unstable();
+    faces
 }
 
-/// Reorders the nodes of every boundary facet that lies on a cell face so that its right-hand
-/// normal ([`Mesh::facet_normal`]) points out of that cell. Facets that close no cell are left as
-/// they are (the mesh checks report them).
-pub(crate) fn orient_facets_outward(mesh: &mut Mesh) {
-    let incidence = cell_facets(mesh);
+/// The faces with this key (one for a boundary facet, two for an interior one).
+pub(crate) fn faces_with<'a>(faces: &'a [Face], key: &[usize; 3]) -> &'a [Face] {
+    let start = faces.partition_point(|f| f.key < *key);
+    let end = start + faces[start..].partition_point(|f| f.key == *key);
+    &faces[start..end]
+}
+
+/// Checks that every face bounds at most two cells and that the two cells of an interior face
+/// lie on opposite sides of it (a cell turned inside out, or two overlapping cells, put both
+/// opposite vertices on one side).
+pub(crate) fn check_cells(mesh: &Mesh, faces: &[Face]) -> Result<(), MeshError> {
+    let mut i = 0;
+    while i < faces.len() {
+        let run = faces[i..].partition_point(|f| f.key == faces[i].key);
+        let group = &faces[i..i + run];
+        if group.len() > 2 {
+            return Err(MeshError::NonManifold {
+                facet: face_coords(mesh, &group[0].key),
+                cells: group.iter().map(|f| f.cell).collect(),
+            });
+        }
+        if let [a, b] = group {
+            let side = |opposite: usize| side_of(mesh, &a.key, opposite);
+            if side(a.opposite) * side(b.opposite) >= 0.0 {
+                return Err(MeshError::Tangled {
+                    cells: [a.cell, b.cell],
+                    facet: face_coords(mesh, &a.key),
+                });
+            }
+        }
+        i += run;
+    }
+    Ok(())
+}
+
+/// Checks that every boundary facet is the face of exactly one cell, and orders its nodes so that
+/// its right-hand normal ([`Mesh::facet_normal`]) points out of that cell.
+pub(crate) fn orient_boundary(mesh: &mut Mesh, faces: &[Face]) -> Result<(), MeshError> {
     for f in 0..mesh.n_facets() {
-        let Some(&[(_, opposite)]) = incidence.get(&facet_key(mesh.facet(f))).map(Vec::as_slice) else {
-            continue;
+        let key = facet_key(mesh.facet(f));
+        let part = || mesh.part_names[mesh.facet_parts[f]].clone();
+        let opposite = match faces_with(faces, &key) {
+            [face] => face.opposite,
+            [] => {
+                return Err(MeshError::FacetOnNoCell {
+                    part: part(),
+                    facet: face_coords(mesh, &key),
+                })
+            }
+            _ => {
+                return Err(MeshError::FacetInside {
+                    part: part(),
+                    facet: face_coords(mesh, &key),
+                })
+            }
         };
         let normal = mesh.facet_area_vector(f);
         let x0 = mesh.coords[mesh.facet(f)[0]];
@@ -45,4 +120,33 @@ pub(crate) fn orient_facets_outward(mesh: &mut Mesh) {
             mesh.facets.swap(f * d, f * d + 1);
         }
     }
+    Ok(())
+}
+
+/// Which side of the face `key` the point `p` lies on (the sign of its distance, for a fixed
+/// orientation of the face).
+fn side_of(mesh: &Mesh, key: &[usize; 3], p: usize) -> f64 {
+    let x = |i: usize| mesh.coords[i];
+    let (a, b, q) = (x(key[0]), x(key[1]), x(p));
+    let e = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let r = [q[0] - a[0], q[1] - a[1], q[2] - a[2]];
+    if mesh.dim == 2 {
+        e[0] * r[1] - e[1] * r[0]
+    } else {
+        let c = x(key[2]);
+        let g = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            e[1] * g[2] - e[2] * g[1],
+            e[2] * g[0] - e[0] * g[2],
+            e[0] * g[1] - e[1] * g[0],
+        ];
+        n[0] * r[0] + n[1] * r[1] + n[2] * r[2]
+    }
+}
+
+fn face_coords(mesh: &Mesh, key: &[usize; 3]) -> Vec<[f64; 3]> {
+    key.iter()
+        .filter(|&&p| p != usize::MAX)
+        .map(|&p| mesh.coords[p])
+        .collect()
 }
