@@ -998,8 +998,9 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
     Ok(())
 }
 
-/// A user table that sets `mesh.file` replaces the generator: the base's geometry and cell
-/// counts go, and the user may not give them beside the file.
+/// A user table that sets `mesh.file` replaces the generator: the base's geometry, cell counts
+/// and tractions (on the generator's parts) go, and the user may not give the first two beside
+/// the file.
 fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
     let Some(Value::Table(mesh)) = user.get("mesh") else {
         return Ok(());
@@ -1023,6 +1024,10 @@ fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
     }
     base.remove("geometry");
     base.insert("mesh".into(), Value::Table(Table::new()));
+    // The default's tractions act on the rectangle's parts: a mesh file has its own.
+    if let Some(Value::Table(loads)) = base.get_mut("loads") {
+        loads.insert("traction".into(), Value::Array(Vec::new()));
+    }
     Ok(())
 }
 
