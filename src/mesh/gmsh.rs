@@ -335,29 +335,24 @@ impl Raw {
             });
         }
         // Node tags → compact indices, in order of the file, keeping nodes some element uses.
-        let mut used: HashMap<u64, usize> = HashMap::new();
+        let mut used: HashMap<u64, Option<usize>> = HashMap::new();
         for b in &self.blocks {
             for &tag in &b.nodes {
-                used.insert(tag, usize::MAX);
+                used.insert(tag, None);
             }
         }
         let mut coords = Vec::with_capacity(used.len());
         for (tag, x) in &self.nodes {
-            if let Some(index) = used.get_mut(tag) {
-                if *index == usize::MAX {
-                    *index = coords.len();
-                    coords.push(*x);
-                }
+            if let Some(index @ None) = used.get_mut(tag) {
+                *index = Some(coords.len());
+                coords.push(*x);
             }
         }
         let index = |tag: &u64| -> Result<usize, MeshError> {
-            match used.get(tag) {
-                Some(&i) if i != usize::MAX => Ok(i),
-                _ => Err(MeshError::Format {
-                    path: path.to_path_buf(),
-                    message: format!("an element refers to node {tag}, which $Nodes does not list"),
-                }),
-            }
+            used.get(tag).copied().flatten().ok_or_else(|| MeshError::Format {
+                path: path.to_path_buf(),
+                message: format!("an element refers to node {tag}, which $Nodes does not list"),
+            })
         };
         let mut cells = Vec::new();
         // Physical group tag → (its facets' nodes).
