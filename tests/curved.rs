@@ -247,3 +247,45 @@ fn ring_on_a_shaft_carries_tau_b2_over_a2_and_slips_at_the_predicted_time() {
         assert!((26..=28).contains(&run.onset_step), "onset at step {}", run.onset_step);
     }
 }
+
+/// Two contact parts meeting at a corner (the issue's `contact = ["bottom", "right"]`): each
+/// node takes its own face's normal, and the corner node, where the normals differ by 90°,
+/// keeps u_ν = 0 of both faces: it does not move.
+#[test]
+fn two_contact_parts_meeting_at_a_corner_get_their_own_normals_and_a_held_corner() {
+    let scenario = thermocontact::Scenario::load(
+        None,
+        &[
+            "mesh.nx=16",
+            "mesh.ny=4",
+            "time.steps=8",
+            r#"boundary.contact=["bottom", "right"]"#,
+            r#"boundary.neumann=["top"]"#,
+            r#"loads.traction=[{part="top", constant=[0.0, 0.0], rate=[0.0, -800.0]}]"#,
+        ]
+        .map(String::from),
+    )
+    .unwrap();
+    let problem = scenario.build().unwrap();
+    let (_, last) = scenario.run_quiet().unwrap();
+    let rows = contact_rows(&problem, &last, 1e-6);
+    // The bottom's nodes but the clamped (0, 0) and the corner, and the right's above the corner
+    // (the top one too: contact wins over Neumann) carry friction; the corner (40, 0) does not.
+    assert_eq!(rows.len(), 15 + 4);
+    for r in &rows {
+        let expected = if r.x[1] == 0.0 { [0.0, -1.0] } else { [1.0, 0.0] };
+        assert_eq!([r.normal[0], r.normal[1]], expected, "node at {:?}", r.x);
+    }
+    let corner = problem
+        .mesh
+        .coords
+        .iter()
+        .position(|x| x[0] == 40.0 && x[1] == 0.0)
+        .unwrap();
+    assert_eq!(&last.u[2 * corner..2 * corner + 2], &[0.0, 0.0]);
+    // The bilateral condition holds along each face: no normal velocity anywhere on Γ_C.
+    for r in &rows {
+        let w = &last.w[2 * r.node..2 * r.node + 2];
+        assert!((w[0] * r.normal[0] + w[1] * r.normal[1]).abs() < 1e-14);
+    }
+}
