@@ -44,6 +44,11 @@ pub enum Error {
         x: [f64; 3],
         value: Vec<f64>,
     },
+    /// Two boundary parts given roles share facets (one facet in two physical groups).
+    #[error(
+        "the boundary parts `{first}` and `{second}` share facets: give each facet one role (in Gmsh, put it in one physical group)"
+    )]
+    PartsShareFacets { first: String, second: String },
     /// A symmetry part that is not flat.
     #[error("the symmetry part `{part}` is not flat (a symmetry plane needs one normal)")]
     CurvedSymmetryPart { part: String },

@@ -329,6 +329,7 @@ impl ProblemBuilder {
             contact: find("contact", &self.contact)?,
             symmetry: find("symmetry", &self.symmetry)?,
         };
+        no_shared_facets(&mesh, &parts)?;
         let material = self.material;
 
         // Constraints per node; Dirichlet wins at corners.
@@ -539,6 +540,25 @@ fn in_velocity_space(mesh: &Mesh, space: &VelocitySpace, datum: &Datum, label: &
         }
     }
     Ok(projected)
+}
+
+/// The parts given roles share no facet (a facet in two physical groups would otherwise count
+/// twice in Γ_C's weights or carry two boundary conditions).
+fn no_shared_facets(mesh: &Mesh, parts: &BoundaryParts) -> Result<(), Error> {
+    let roles = [&parts.dirichlet, &parts.neumann, &parts.contact, &parts.symmetry];
+    let used: Vec<usize> = roles.into_iter().flatten().copied().collect();
+    let mut keys: Vec<([usize; 3], usize)> = mesh
+        .facets_of(&used)
+        .map(|f| (crate::mesh::topology::facet_key(mesh.facet(f)), mesh.facet_parts[f]))
+        .collect();
+    keys.sort_unstable();
+    match keys.windows(2).find(|w| w[0].0 == w[1].0) {
+        Some(w) => Err(Error::PartsShareFacets {
+            first: mesh.part_names[w[0].1].clone(),
+            second: mesh.part_names[w[1].1].clone(),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Per node, the unit normals of the symmetry planes through it.

@@ -786,7 +786,10 @@ impl Scenario {
 
     /// The discrete problem of the scenario.
     pub fn build(&self) -> Result<Problem, Error> {
-        self.builder()?.build()
+        self.builder()?.build().map_err(|e| match e {
+            Error::CurvedSymmetryPart { part } => invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)"),
+            other => other,
+        })
     }
 
     /// The solver settings of the scenario.

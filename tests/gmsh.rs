@@ -255,3 +255,51 @@ fn the_2d_showcase_runs_from_the_command_line() {
         );
     }
 }
+
+/// Parts that share facets (one facet in two physical groups) cannot both take roles, and a
+/// symmetry plane must be flat.
+#[test]
+fn overlapping_parts_and_curved_symmetry_planes_are_refused() {
+    use thermocontact::problem::{ProblemBuilder, TimeGrid};
+    let r = mesh::rectangle(4.0, 1.0, 4, 1);
+    let bottom = r.part_index("bottom").unwrap();
+    let mut facets = r.facets.clone();
+    let mut facet_parts = r.facet_parts.clone();
+    for f in (0..r.n_facets()).filter(|&f| r.facet_parts[f] == bottom) {
+        facets.extend_from_slice(r.facet(f));
+        facet_parts.push(4);
+    }
+    let mut names = r.part_names.clone();
+    names.push("bottom again".into());
+    let twice = Mesh::new(2, r.coords.clone(), r.cells.clone(), facets, facet_parts, names).unwrap();
+    let material = thermocontact::material::Material {
+        density: 1.0,
+        heat_capacity: 1.0,
+        viscosity: thermocontact::material::Isotropic::viscosity(1.0, 1.0),
+        elasticity: thermocontact::material::Isotropic::elasticity(1.0, 0.3),
+        expansion: 0.0,
+        conductivity: 1.0,
+    };
+    let e = ProblemBuilder::new(twice, material, TimeGrid::new(1.0, 1))
+        .contact(&["bottom", "bottom again"])
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("`bottom`") && e.contains("`bottom again`") && e.contains("share"),
+        "{e}"
+    );
+
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/brake_shoe.toml");
+    let s = Scenario::load_file(
+        &scenario,
+        &[
+            r#"boundary.neumann=["tip"]"#.into(),
+            r#"boundary.symmetry=["back"]"#.into(),
+            "loads.pressure=[]".into(),
+        ],
+    )
+    .unwrap();
+    let e = s.build().unwrap_err().to_string();
+    assert!(e.contains("boundary.symmetry") && e.contains("back"), "{e}");
+}
