@@ -140,6 +140,18 @@ fn unreadable_and_unsupported_files_are_refused_naming_the_file() {
             "not a Gmsh mesh",
         ),
         ("truncated.msh", text[..text.len() - 40].to_string(), "truncated"),
+        // Node 3 moved across the diagonal 1–4: the two triangles overlap.
+        (
+            "tangled.msh",
+            text.replace("0.0 1.0 0.0\n", "0.6 0.2 0.0\n"),
+            "same side",
+        ),
+        // Node 3 moved onto the diagonal 1–4: the second triangle is flat.
+        (
+            "degenerate.msh",
+            text.replace("0.0 1.0 0.0\n", "0.5 0.5 0.0\n"),
+            "degenerate",
+        ),
         // A node that only a facet uses: not in any cell.
         (
             "unused.msh",
