@@ -29,6 +29,9 @@
 //! | ξ, ζ | `xi`, `zeta` | friction stress, heat-exchange multiplier on Γ_C |
 //! | k, n, m | `k` / `time_step`, `n`, `m` | time step, time level, convexification iterate |
 //! | ℓ_i | `weight` | nodal quadrature weight ∫_ΓC φ_i |
+//! | ν_i, t_{i,k} | `normal`, `tangents` | a contact node's outward normal and tangent basis ([`contact::frames`]) |
+//! | T, N | `final_time`, `steps` | the time grid ([`problem::TimeGrid`]) |
+//! | f₀, f₂, p, g | `BodyForce`, `Traction`, `Pressure`, `HeatSource` | loads ([`problem::LoadTarget`], [`loads::Datum`]) |
 //! | μ(r) S | `bound` | friction bound at slip rate r |
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of MODEL.md |
@@ -37,9 +40,11 @@
 //!
 //! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
 //! [`loads`] (data as constants, affine in t or expressions of x, y, z, t; P1 load vectors),
-//! [`contact`] (laws) → [`problem`] (a scenario made discrete) → [`solver`] (step system and
-//! nonsmooth solvers) → [`time`] (the time loop) → [`output`] (files) ; [`scenario`] reads
-//! the input, [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
+//! [`contact`] (per-node frames, laws) → [`problem`] (built by [`problem::ProblemBuilder`] from
+//! typed parts: the discrete problem) → [`solver`] (step system and nonsmooth solvers) →
+//! [`time`] (the one time loop) → [`driver`] (a run: output, progress, timings) → [`output`]
+//! (files); [`scenario`] translates TOML into the builder's parts (the core never sees it),
+//! [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
 //! regenerates the paper's Section 6 (figures and the study of its open points).
 
 pub mod bench;

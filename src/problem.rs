@@ -158,7 +158,7 @@ pub struct Problem {
     /// Space–time dependent loads given as code rather than data (the verification family of
     /// [`crate::verification::manufactured`]); `None` otherwise.
     pub extra_loads: Option<Box<dyn ExtraLoads>>,
-    /// Wall time [s] the builder took (reported as the run's assembly time).
+    /// Wall time the builder took, in seconds (reported as the run's assembly time).
     pub build_seconds: f64,
 }
 
