@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use thermocontact::mesh::chains;
 use thermocontact::output::figures::{render, DeformedFigure, Figure, Panel};
 use thermocontact::reproduction::{panel_title, record_run};
 use thermocontact::Scenario;
@@ -156,8 +157,7 @@ fn a_rendered_panel_has_the_figure_size_and_shows_the_temperature() {
         }],
         columns: 1,
         scale: 1.0,
-        tangent: [1.0, 0.0],
-        normal: [0.0, -1.0],
+        gamma_c: chains::part_chains(&run.problem.mesh, &run.problem.parts.contact),
         force_unit: 150.0,
     };
     let rendered = render(&figure).unwrap();
@@ -301,4 +301,38 @@ fn the_reports_coarse_entries_match_a_fresh_run() {
         let computed: Vec<usize> = run.summary.outputs.iter().map(|o| o.slip_nodes).collect();
         assert_eq!(reported, computed, "θ_D = {theta_d}: report against a fresh run");
     }
+}
+
+#[test]
+fn figures_of_a_curved_gmsh_contact_follow_the_arc() {
+    let out = scratch("curved");
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/brake_shoe.toml");
+    let result = bin()
+        .arg("figures")
+        .arg(&scenario)
+        .args(["--expansions", "1e-3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    let fig2 = decode_png(&out.join("fig2_deformed.png"));
+    assert!(
+        fig2.pixels().any(|p| p.0 == [255, 0, 0]),
+        "the shoe slips: slip markers are drawn"
+    );
+    // The legend names a finite arrow stride (a wrong spacing along a curve once gave 4·10⁹).
+    let svg = std::fs::read_to_string(out.join("fig2_deformed.svg")).unwrap();
+    let needle = "friction stress ξ on Γ_C at every ";
+    let at = svg.find(needle).expect("arrow legend") + needle.len();
+    let stride: String = svg[at..].chars().take_while(char::is_ascii_digit).collect();
+    assert!((1..=10).contains(&stride.parse::<u32>().unwrap()), "stride {stride}");
+    // Panel counts are the run's, and the profiles are drawn against arc length.
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let titles = title_counts(&svg);
+    for ((_, slip, _), o) in titles.iter().zip(summary["outputs"].as_array().unwrap()) {
+        assert_eq!(*slip, o["slip_nodes"].as_u64().unwrap());
+    }
+    let profiles = std::fs::read_to_string(out.join("contact_profiles.svg")).unwrap();
+    assert!(profiles.contains("arc length s along Γ_C"));
+    std::fs::remove_dir_all(&out).ok();
 }

@@ -8,9 +8,11 @@
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
 //! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`). Files: [`read_msh`] reads Gmsh
 //! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
-//! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`].
+//! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
+//! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 
 mod annulus;
+pub mod chains;
 mod check;
 mod cuboid;
 mod gmsh;

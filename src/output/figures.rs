@@ -7,7 +7,11 @@
 //!   and counted in each panel's title.
 //! * [`SlipHistoryFigure`]: the number of slip nodes against time, with the counts the paper
 //!   reports as markers.
-//! * [`ContactProfileFigure`]: θ, w_τ and ξ along Γ_C at the output times.
+//! * [`ContactProfileFigure`]: θ, w_τ and ξ against arc length along Γ_C at the output times.
+//!
+//! Any 2D mesh: the body is drawn from its cells and its outline ([`chains::outline`]), and Γ_C
+//! is followed as ordered pieces ([`chains::part_chains`]) with each node's own frame (ν_i, τ_i),
+//! so a curved Γ_C or one of several parts gets arrows along the curve at even arc-length steps.
 //!
 //! A figure is drawn once per backend from the same code ([`Figure::draw`]); [`render`] makes the
 //! PNG bytes and the SVG text in memory and [`write`] stores both atomically.
@@ -17,6 +21,7 @@ use std::path::{Path, PathBuf};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+use crate::mesh::chains::{self, Chain};
 use crate::mesh::Mesh;
 use crate::output::plot::{ensure_fonts, FONT};
 use crate::output::{write_atomic, OutputError};
@@ -132,9 +137,8 @@ pub struct DeformedFigure<'a> {
     pub columns: usize,
     /// Displacement scale s: points are drawn at x + s u(x).
     pub scale: f64,
-    /// Unit tangent τ of Γ_C (ξ and w_τ are its coordinates) and outward unit normal ν.
-    pub tangent: [f64; 2],
-    pub normal: [f64; 2],
+    /// Γ_C as ordered pieces ([`chains::part_chains`]): where the arrows go.
+    pub gamma_c: Vec<Chain>,
     /// |ξ| [N/m] drawn as a full-length arrow (the friction bound at rest μ(0)S reads well);
     /// ≤ 0 picks the largest |ξ| of the figure, rounded up.
     pub force_unit: f64,
@@ -149,11 +153,18 @@ const HEADING_HEIGHT: u32 = 62;
 const LEGEND_HEIGHT: u32 = 56;
 const COLORBAR_WIDTH: u32 = 160;
 
+/// A friction arrow in the plot's coordinates, with the node's tangent (the arrow's line).
+struct Arrow {
+    start: (f64, f64),
+    end: (f64, f64),
+    tangent: (f64, f64),
+}
+
 /// The arrows' geometry, shared by all panels of a figure so that lengths compare.
 struct ArrowLayout {
-    /// Smallest distance [m] between contact nodes along Γ_C.
+    /// Mean distance [m] between neighbouring nodes along Γ_C.
     spacing: f64,
-    /// An arrow at every `stride`-th contact node (counted from the free end), so that
+    /// An arrow at every `stride`-th node of each piece of Γ_C (counted from its end), so that
     /// neighbours do not overlap: arrows lie along Γ_C.
     stride: usize,
     /// Length [m] of an arrow of size `unit`.
@@ -194,20 +205,15 @@ impl DeformedFigure<'_> {
                 gap: 0.5,
             };
         };
-        // Node spacing along Γ_C from the sorted tangential coordinates.
-        let mut s: Vec<f64> = first
-            .contact
-            .iter()
-            .map(|r| r.x[0] * self.tangent[0] + r.x[1] * self.tangent[1])
-            .collect();
-        s.sort_by(f64::total_cmp);
-        let spacing = s
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .filter(|&d| d > 0.0)
-            .fold(f64::INFINITY, f64::min);
+        // Node spacing along Γ_C: its length over its edges.
+        let length: f64 = self.gamma_c.iter().map(Chain::length).sum();
+        let edges: usize = self.gamma_c.iter().map(|c| c.nodes.len().saturating_sub(1)).sum();
         let extent = mesh_extent(first.mesh);
-        let spacing = if spacing.is_finite() { spacing } else { extent };
+        let spacing = if edges > 0 && length > 0.0 {
+            length / edges as f64
+        } else {
+            extent
+        };
         // Arrows of about 5% of the body's size, at least one node apart.
         let wanted = 0.05 * extent;
         let stride = ((wanted / spacing).ceil() as usize).max(1);
@@ -249,38 +255,40 @@ impl DeformedFigure<'_> {
     }
 
     /// The friction arrows of a panel: from each chosen deformed contact node pushed out by
-    /// `gap` along ν, along ±τ with length ∝ ξ.
-    fn arrow_segments(
-        &self,
-        panel: &Panel,
-        deformed: &[(f64, f64)],
-        arrows: &ArrowLayout,
-    ) -> Vec<((f64, f64), (f64, f64))> {
-        let (tau, nu) = (self.tangent, self.normal);
-        let along = |r: &ContactRow| r.x[0] * tau[0] + r.x[1] * tau[1];
-        let mut rows: Vec<&ContactRow> = panel.contact.iter().collect();
-        // From the end at the largest x·τ (the free end of the example), so that it has an arrow.
-        rows.sort_by(|a, b| along(b).total_cmp(&along(a)));
-        rows.into_iter()
-            .step_by(arrows.stride)
+    /// `gap` along its ν_i, the vector ξ_i = ξ τ_i scaled to `full_length / unit`.
+    fn arrow_segments(&self, panel: &Panel, deformed: &[(f64, f64)], arrows: &ArrowLayout) -> Vec<Arrow> {
+        let rows: std::collections::HashMap<usize, &ContactRow> = panel.contact.iter().map(|r| (r.node, r)).collect();
+        // From the end of each piece (the free end of the paper's Γ_C), so that it has an arrow;
+        // clamped nodes have no row and no arrow but keep their place in the count.
+        self.gamma_c
+            .iter()
+            .flat_map(|c| c.distinct_nodes().iter().rev().step_by(arrows.stride))
+            .filter_map(|p| rows.get(p))
             .map(|r| {
                 let (x, y) = deformed[r.node];
+                let (nu, tau, xi) = (r.normal, r.tangents[0], r.friction_vector());
                 let start = (x + arrows.gap * nu[0], y + arrows.gap * nu[1]);
-                let length = arrows.full_length * r.xi[0] / arrows.unit;
-                (start, (start.0 + length * tau[0], start.1 + length * tau[1]))
+                let scale = arrows.full_length / arrows.unit;
+                Arrow {
+                    start,
+                    end: (start.0 + scale * xi[0], start.1 + scale * xi[1]),
+                    tangent: (tau[0], tau[1]),
+                }
             })
             .collect()
     }
 
     /// What a panel must show: reference and deformed body, and room for the longest arrows.
     fn panel_bounds(&self, panel: &Panel, deformed: &[(f64, f64)], arrows: &ArrowLayout) -> Bounds {
-        let tau = self.tangent;
         let mut bounds = Bounds::default();
         panel.mesh.coords.iter().for_each(|x| bounds.add(x[0], x[1]));
         deformed.iter().for_each(|&(x, y)| bounds.add(x, y));
-        for (a, _) in self.arrow_segments(panel, deformed, arrows) {
-            bounds.add(a.0 + arrows.full_length * tau[0], a.1 + arrows.full_length * tau[1]);
-            bounds.add(a.0 - arrows.full_length * tau[0], a.1 - arrows.full_length * tau[1]);
+        for Arrow {
+            start: a, tangent: t, ..
+        } in self.arrow_segments(panel, deformed, arrows)
+        {
+            bounds.add(a.0 + arrows.full_length * t.0, a.1 + arrows.full_length * t.1);
+            bounds.add(a.0 - arrows.full_length * t.0, a.1 - arrows.full_length * t.1);
         }
         let pad = 0.025 * (bounds.x1 - bounds.x0).max(bounds.y1 - bounds.y0);
         bounds.padded(pad)
@@ -370,7 +378,8 @@ impl DeformedFigure<'_> {
             )?;
         }
         // Reference outline (dashed) and deformed outline.
-        for cycle in boundary_cycles(mesh) {
+        for cycle in chains::outline(mesh) {
+            let cycle = cycle.nodes;
             let reference: Vec<(f64, f64)> = cycle.iter().map(|&p| (mesh.coords[p][0], mesh.coords[p][1])).collect();
             chart.draw_series(DashedLineSeries::new(
                 reference,
@@ -385,7 +394,7 @@ impl DeformedFigure<'_> {
         let head = 0.3 * arrows.full_length;
         let shapes: Vec<ArrowShape> = arrow_segments
             .iter()
-            .filter_map(|&(a, b)| arrow_shape(a, b, head))
+            .filter_map(|a| arrow_shape(a.start, a.end, head))
             .collect();
         chart.draw_series(
             shapes
@@ -617,8 +626,9 @@ pub struct ContactProfileFigure {
     pub subheading: String,
     /// (t, contact rows) per output time.
     pub profiles: Vec<(f64, Vec<ContactRow>)>,
-    /// Unit tangent τ of Γ_C: the abscissa is x·τ.
-    pub tangent: [f64; 2],
+    /// Γ_C as ordered pieces: the abscissa is the arc length s along them, one piece after the
+    /// other.
+    pub gamma_c: Vec<Chain>,
     /// μ(0)S, the friction bound at rest, drawn as ±bound on the ξ panel.
     pub bound_at_rest: f64,
 }
@@ -637,8 +647,17 @@ impl Figure for ContactProfileFigure {
         let (head, root) = root.split_vertically(HEADING_HEIGHT);
         draw_heading(&head, &self.heading, &self.subheading)?;
         let panels = root.split_evenly((3, 1));
-        let tau = self.tangent;
-        let abscissa = |r: &ContactRow| r.x[0] * tau[0] + r.x[1] * tau[1];
+        // Arc length of every Γ_C node, the pieces laid end to end; a piece's nodes in order.
+        let mut offset = 0.0;
+        let pieces: Vec<Vec<(usize, f64)>> = self
+            .gamma_c
+            .iter()
+            .map(|c| {
+                let piece = c.nodes.iter().zip(&c.arc).map(|(&p, &s)| (p, offset + s)).collect();
+                offset += c.length();
+                piece
+            })
+            .collect();
         type Pick = fn(&ContactRow) -> f64;
         let quantities: [(&str, Pick); 3] = [
             ("temperature θ on Γ_C [°C]", |r| r.theta),
@@ -646,11 +665,8 @@ impl Figure for ContactProfileFigure {
             ("friction stress ξ [N/m]", |r| r.xi[0]),
         ];
         let mut s_range = Bounds::default();
-        for (_, rows) in &self.profiles {
-            for r in rows {
-                s_range.add(abscissa(r), 0.0);
-            }
-        }
+        s_range.add(0.0, 0.0);
+        s_range.add(offset.max(1e-12), 0.0);
         for (q, ((label, pick), area)) in quantities.iter().zip(&panels).enumerate() {
             let mut y = Bounds::default();
             for (_, rows) in &self.profiles {
@@ -670,7 +686,7 @@ impl Figure for ContactProfileFigure {
                 .build_cartesian_2d(s_range.x0..s_range.x1, (y.y0 - 0.06 * span)..(y.y1 + 0.3 * span))?;
             chart
                 .configure_mesh()
-                .x_desc("position along Γ_C [m]")
+                .x_desc("arc length s along Γ_C [m]")
                 .y_desc(*label)
                 .label_style((FONT, 14))
                 .axis_desc_style((FONT, 16))
@@ -678,13 +694,22 @@ impl Figure for ContactProfileFigure {
                 .draw()?;
             for (i, (t, rows)) in self.profiles.iter().enumerate() {
                 let color = series_color(i);
-                let mut points: Vec<(f64, f64)> = rows.iter().map(|r| (abscissa(r), pick(r))).collect();
-                points.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let at: std::collections::HashMap<usize, &ContactRow> = rows.iter().map(|r| (r.node, r)).collect();
                 let slips = rows.iter().filter(|r| r.slip).count();
-                chart
-                    .draw_series(LineSeries::new(points, ShapeStyle::from(&color).stroke_width(2)))?
-                    .label(format!("t = {} s ({slips} slip)", format_number(*t)))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+                // One line per piece, through its nodes that have a row (clamped nodes have none).
+                for (k, piece) in pieces.iter().enumerate() {
+                    let points: Vec<(f64, f64)> = piece
+                        .iter()
+                        .filter_map(|(p, s)| at.get(p).map(|r| (*s, pick(r))))
+                        .collect();
+                    let series =
+                        chart.draw_series(LineSeries::new(points, ShapeStyle::from(&color).stroke_width(2)))?;
+                    if k == 0 {
+                        series
+                            .label(format!("t = {} s ({slips} slip)", format_number(*t)))
+                            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+                    }
+                }
             }
             if q == 2 {
                 let (x0, x1) = (s_range.x0, s_range.x1);
@@ -921,34 +946,6 @@ fn mean_edge_length(mesh: &Mesh) -> f64 {
     total / edges.len().max(1) as f64
 }
 
-/// The boundary of a 2D mesh as closed node cycles, by chaining its boundary edges.
-fn boundary_cycles(mesh: &Mesh) -> Vec<Vec<usize>> {
-    let mut next: std::collections::BTreeMap<usize, Vec<usize>> = std::collections::BTreeMap::new();
-    for f in 0..mesh.n_facets() {
-        let e = mesh.facet(f);
-        next.entry(e[0]).or_default().push(e[1]);
-        next.entry(e[1]).or_default().push(e[0]);
-    }
-    let mut used = std::collections::BTreeSet::new();
-    let mut cycles = Vec::new();
-    for &start in next.keys() {
-        if used.contains(&start) {
-            continue;
-        }
-        let mut cycle = vec![start];
-        used.insert(start);
-        let mut current = start;
-        while let Some(&n) = next[&current].iter().find(|n| !used.contains(*n)) {
-            used.insert(n);
-            cycle.push(n);
-            current = n;
-        }
-        cycle.push(start);
-        cycles.push(cycle);
-    }
-    cycles
-}
-
 /// A step curve through (t_n, count_n), starting from (0, 0): counts hold over (t_{n−1}, t_n].
 fn steps(counts: &[(f64, usize)]) -> Vec<(f64, f64)> {
     let mut points = vec![(0.0, 0.0)];
@@ -1056,6 +1053,76 @@ mod tests {
         }
     }
 
+    /// Rows of a fabricated state on the inner circle of an annulus: ν_i = −x/|x| (out of Ω, into
+    /// the hole), τ_i = ν_i turned by +90°, ξ = `xi` everywhere.
+    fn ring_rows(mesh: &Mesh, xi: f64) -> Vec<ContactRow> {
+        let inner = mesh.part_index("inner").unwrap();
+        let on = mesh.nodes_on(&[inner]);
+        (0..mesh.n_nodes())
+            .filter(|&p| on[p])
+            .map(|p| {
+                let x = mesh.coords[p];
+                let r = x[0].hypot(x[1]);
+                let normal = [-x[0] / r, -x[1] / r, 0.0];
+                ContactRow {
+                    node: p,
+                    x,
+                    normal,
+                    tangents: vec![[-normal[1], normal[0], 0.0]],
+                    w_tau: vec![0.0],
+                    xi: vec![xi],
+                    bound: 1.0,
+                    slip: false,
+                    theta: 0.0,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn arrows_on_a_curved_contact_lie_along_each_nodes_tangent_outside_the_body() {
+        let (a, b) = (1.0, 2.0);
+        let mesh = crate::mesh::annulus(a, b, 4, 96);
+        let rows = ring_rows(&mesh, 0.5);
+        let u = vec![0.0; 2 * mesh.n_nodes()];
+        let theta = vec![0.0; mesh.n_nodes()];
+        let figure = DeformedFigure {
+            name: "ring".into(),
+            heading: String::new(),
+            subheading: String::new(),
+            panels: vec![Panel {
+                title: String::new(),
+                mesh: &mesh,
+                u: &u,
+                theta: &theta,
+                contact: &rows,
+            }],
+            columns: 1,
+            scale: 1.0,
+            gamma_c: chains::part_chains(&mesh, &[mesh.part_index("inner").unwrap()]),
+            force_unit: 1.0,
+        };
+        let layout = figure.arrow_layout();
+        // Arrows of about 5% of the body (4 m across) at an even stride of the 96 nodes.
+        let spacing = 2.0 * a * (std::f64::consts::PI / 96.0).sin();
+        assert!((layout.spacing - spacing).abs() < 1e-12);
+        assert_eq!(layout.stride, (0.05 * 2.0 * b / spacing).ceil() as usize);
+        let deformed = figure.deformed(&figure.panels[0]);
+        let arrows = figure.arrow_segments(&figure.panels[0], &deformed, &layout);
+        assert_eq!(arrows.len(), 96usize.div_ceil(layout.stride));
+        for arrow in &arrows {
+            let (s, e) = (arrow.start, arrow.end);
+            let r = s.0.hypot(s.1);
+            // Offset by the gap into the hole, the side of ν_i.
+            assert!((r - (a - layout.gap)).abs() < 1e-9, "start at radius {r}");
+            // Along the tangent of the node, at half the full length for ξ = 0.5 · unit.
+            let (dx, dy) = (e.0 - s.0, e.1 - s.1);
+            assert!((dx * s.0 + dy * s.1).abs() < 1e-9 * r);
+            assert!((dx.hypot(dy) - 0.5 * layout.full_length).abs() < 1e-9);
+        }
+        render(&figure).unwrap();
+    }
+
     #[test]
     fn equal_aspect_keeps_the_box_and_the_scale() {
         let mut b = Bounds::default();
@@ -1065,15 +1132,5 @@ mod tests {
         assert!(x.start <= 0.0 && x.end >= 40.0 && y.start <= 0.0 && y.end >= 10.0);
         let (sx, sy) = ((x.end - x.start) / 800.0, (y.end - y.start) / 400.0);
         assert!((sx - sy).abs() < 1e-12 * sx);
-    }
-
-    #[test]
-    fn the_boundary_of_a_rectangle_is_one_cycle_through_every_boundary_node() {
-        let mesh = crate::mesh::rectangle(4.0, 1.0, 4, 2);
-        let cycles = boundary_cycles(&mesh);
-        assert_eq!(cycles.len(), 1);
-        // 2(nx + ny) boundary nodes, the first repeated at the end.
-        assert_eq!(cycles[0].len(), 2 * (4 + 2) + 1);
-        assert_eq!(cycles[0].first(), cycles[0].last());
     }
 }

@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use crate::driver::{self, record, OutputRecord, RunOptions, Summary};
 use crate::error::Error;
+use crate::mesh::chains;
 use crate::output::figures::{
     self, format_number, ContactProfileFigure, DeformedFigure, FigureError, HistorySeries, Panel, SlipHistoryFigure,
 };
@@ -308,10 +309,7 @@ pub fn make_figures(
         format_number(scenario.boundary.temperature),
         format_number(scenario.solver.slip_tolerance)
     );
-    // The paper's Γ_C is flat: the first node's frame serves the whole figure.
-    let frame = &main.problem.contact[0];
-    let tangent = [frame.tangents[0][0], frame.tangents[0][1]];
-    let normal = [frame.normal[0], frame.normal[1]];
+    let gamma_c = chains::part_chains(&main.problem.mesh, &main.problem.parts.contact);
     let paper_at = |a: f64, t: f64| if paper { paper_count(a, t) } else { None };
     let mut files = Vec::new();
 
@@ -335,8 +333,7 @@ pub fn make_figures(
             .collect(),
         columns: 1,
         scale: options.scale,
-        tangent,
-        normal,
+        gamma_c: gamma_c.clone(),
         force_unit: main.problem.friction.bound(0.0),
     };
     files.extend(figures::write(&fig2, dir)?);
@@ -364,8 +361,7 @@ pub fn make_figures(
                 .collect(),
             columns: 1,
             scale: options.scale,
-            tangent,
-            normal,
+            gamma_c: gamma_c.clone(),
             force_unit: main.problem.friction.bound(0.0),
         };
         if !fig3.panels.is_empty() {
@@ -412,7 +408,7 @@ pub fn make_figures(
             .iter()
             .map(|s| (s.record.t, s.record.contact.clone()))
             .collect(),
-        tangent,
+        gamma_c,
         bound_at_rest: main.problem.friction.bound(0.0),
     };
     files.extend(figures::write(&profiles, dir)?);
