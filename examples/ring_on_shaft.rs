@@ -106,6 +106,7 @@ fn solve(ring: &Ring, n_radial: usize, n_around: usize, steps: usize, out: Optio
     let options = RunOptions {
         out_dir: out,
         progress: false,
+        log: true,
     };
     let summary = driver::run(&problem, &SolverParams::default(), &plan, &options).expect("the run converges");
 

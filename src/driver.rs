@@ -5,6 +5,11 @@
 //! ```text
 //! factor (StepSystem::new) → set the solver up → N steps (time::march) → outputs
 //! ```
+//!
+//! A run that stops early (a step that does not converge even after the cutbacks, an output
+//! error) still leaves a consistent folder: the frames written so far and the last completed
+//! state in `solution.pvd`, and `summary.json` with `"status": "failed"` and the failure (step,
+//! time, the criterion that failed with its value and tolerance).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,8 +21,8 @@ use crate::error::Error;
 use crate::output::{self, fields, Field, Grid, PvdEntry};
 use crate::problem::Problem;
 use crate::solver::system::{State, StepSystem};
-use crate::solver::{SolverParams, StepInfo};
-use crate::time::{self, contact_rows, ContactRow, StepSolver};
+use crate::solver::{SolverParams, StepFailure, StepInfo};
+use crate::time::{self, contact_rows, ContactRow, Levels, StepSolver, Stopped};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -26,6 +31,8 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// Draw a progress bar on stderr.
     pub progress: bool,
+    /// Print a line on stderr for every cutback and for a failure (batch logs).
+    pub log: bool,
 }
 
 /// What a run records, and when.
@@ -70,7 +77,8 @@ pub struct Timings {
     pub linear_solves: f64,
     /// Of which: building right-hand sides.
     pub right_hand_sides: f64,
-    /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest).
+    /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest; it includes factoring
+    /// the step matrices of cutback levels when a cutback first needs them).
     pub contact_solver: f64,
     /// Writing files.
     pub output: f64,
@@ -130,8 +138,74 @@ pub struct Summary {
     pub factor_nnz: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
     pub peak_memory_mib: Option<f64>,
+    /// Steps cut back into substeps (a step that converged at k is not listed).
+    pub cutbacks: Vec<CutbackRecord>,
+    /// `completed`, or `failed` with [`Summary::failure`].
+    pub status: RunStatus,
+    /// Why the run stopped, when it did.
+    pub failure: Option<FailureRecord>,
     pub timings: Timings,
     pub outputs: Vec<OutputRecord>,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    Completed,
+    Failed,
+}
+
+/// A step that went through substeps.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CutbackRecord {
+    /// Time level n of the step and t_n.
+    pub step: usize,
+    pub t: f64,
+    /// The deepest cutback: the shortest substep was k/2^depth.
+    pub depth: usize,
+    /// Substeps taken.
+    pub substeps: usize,
+}
+
+/// Why a run stopped.
+#[derive(Debug, Clone, Serialize)]
+pub struct FailureRecord {
+    /// The error as the command prints it.
+    pub message: String,
+    /// The step being computed, its target time and the deepest cutback tried (solver
+    /// failures only).
+    pub step: Option<usize>,
+    pub time: Option<f64>,
+    pub cutback_depth: Option<usize>,
+    /// The loop and the criterion that failed, with its value and tolerance.
+    pub solver: Option<StepFailure>,
+    /// The last completed time level and its time (0: the initial state).
+    pub last_step: usize,
+    pub last_time: f64,
+}
+
+impl FailureRecord {
+    fn new(error: &Error, last: &State) -> Self {
+        let (step, time, cutback_depth, solver) = match error {
+            Error::NotConverged {
+                step,
+                time,
+                cutback_depth,
+                failure,
+            } => (Some(*step), Some(*time), Some(*cutback_depth), Some(*failure)),
+            _ => (None, None, None, None),
+        };
+        FailureRecord {
+            message: error.to_string(),
+            step,
+            time,
+            cutback_depth,
+            solver,
+            last_step: last.n,
+            last_time: last.t,
+        }
+    }
 }
 
 /// Runs a problem end to end.
@@ -176,9 +250,9 @@ pub fn run_observed(
     timings.factorization = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let solver = StepSolver::new(problem, &system, params);
+    let levels = Levels::new(problem, params, StepSolver::new(problem, system, params));
     timings.solver_setup = clock.elapsed().as_secs_f64();
-    let setup_stats = system.stats();
+    let setup_stats = levels.stats();
 
     if let Some(dir) = &options.out_dir {
         std::fs::create_dir_all(dir).map_err(|source| output::OutputError::Io {
@@ -206,19 +280,45 @@ pub fn run_observed(
             .expect("valid template")
             .progress_chars("=> "),
     );
+    let log = |line: String| {
+        if options.log {
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+        }
+    };
     let mut outputs = Vec::new();
     let mut pvd = Vec::new();
+    let mut cutbacks = Vec::new();
     let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
     let (mut newton_total, mut fallbacks) = (0, 0);
     let mut output_time = 0.0;
     let loop_clock = Instant::now();
-    let state = time::march(problem, &solver, |state, info| {
+    let marched = time::march(problem, &levels, |state, info| {
         observer(problem, state, info);
         outer_total += info.convexification_iterations;
         inner_total += info.inner_iterations;
         outer_max = outer_max.max(info.convexification_iterations);
         newton_total += info.newton_iterations;
         fallbacks += usize::from(info.fallback);
+        if info.cutback_depth > 0 {
+            let cutback = CutbackRecord {
+                step: state.n,
+                t: state.t,
+                depth: info.cutback_depth,
+                substeps: info.substeps,
+            };
+            log(format!(
+                "step {} (t = {}): cut back, {} substeps, the shortest k/{}",
+                cutback.step,
+                cutback.t,
+                cutback.substeps,
+                1usize << cutback.depth
+            ));
+            cutbacks.push(cutback);
+        }
         bar.inc(1);
         if plan.steps.contains(&state.n) {
             let clock = Instant::now();
@@ -234,11 +334,21 @@ pub fn run_observed(
             output_time += clock.elapsed().as_secs_f64();
         }
         Ok(())
-    })
-    .inspect_err(|_| bar.abandon())?;
-    bar.finish_and_clear();
+    });
+    let (state, failure) = match marched {
+        Ok(state) => {
+            bar.finish_and_clear();
+            (state, None)
+        }
+        Err(stopped) => {
+            let Stopped { error, last } = *stopped;
+            // The caller reports the error itself.
+            bar.abandon();
+            (last, Some(error))
+        }
+    };
     timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
-    let loop_stats = system.stats();
+    let loop_stats = levels.stats();
     timings.linear_solves = loop_stats.solve_seconds - setup_stats.solve_seconds;
     timings.right_hand_sides = loop_stats.rhs_seconds - setup_stats.rhs_seconds;
     timings.contact_solver = timings.time_stepping - timings.linear_solves - timings.right_hand_sides;
@@ -262,30 +372,56 @@ pub fn run_observed(
         newton_iterations: newton_total,
         fallback_steps: fallbacks,
         linear_solves: loop_solves,
-        factor_nnz: system.factor_nnz(),
+        factor_nnz: levels.first().system().factor_nnz(),
         peak_memory_mib: crate::bench::peak_memory_mib(),
+        cutbacks,
+        status: if failure.is_some() {
+            RunStatus::Failed
+        } else {
+            RunStatus::Completed
+        },
+        failure: failure.as_ref().map(|e| FailureRecord::new(e, &state)),
         timings,
         outputs,
     };
-    if let Some(dir) = &options.out_dir {
-        let clock = Instant::now();
-        if plan.vtk {
-            output::write_pvd(&dir.join("solution.pvd"), &pvd)?;
+    let written = match &options.out_dir {
+        Some(dir) => {
+            let clock = Instant::now();
+            (|| -> Result<(), Error> {
+                // A stopped run keeps its last completed state beside the frames written so far.
+                if failure.is_some() && !plan.steps.contains(&state.n) {
+                    let record = record(problem, &state, plan.slip_tolerance);
+                    write_snapshot(problem, plan, &state, &record, dir, &mut pvd)?;
+                }
+                if plan.vtk {
+                    output::write_pvd(&dir.join("solution.pvd"), &pvd)?;
+                }
+                summary.timings.output = output_time + clock.elapsed().as_secs_f64();
+                summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
+                let json = serde_json::to_vec_pretty(&summary).expect("a summary serializes");
+                output::write_atomic(&dir.join("summary.json"), &json).map_err(|source| output::OutputError::Io {
+                    path: dir.join("summary.json"),
+                    source,
+                })?;
+                Ok(())
+            })()
         }
-        summary.timings.output = output_time + clock.elapsed().as_secs_f64();
-        summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-        let json = serde_json::to_vec_pretty(&summary).expect("a summary serializes");
-        output::write_atomic(&dir.join("summary.json"), &json).map_err(|source| output::OutputError::Io {
-            path: dir.join("summary.json"),
-            source,
-        })?;
-    } else {
-        summary.timings.output = output_time;
-        summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
+        None => {
+            summary.timings.output = output_time;
+            summary.timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
+            Ok(())
+        }
+    };
+    match (failure, written) {
+        // The error that stopped the run comes first; one met while recording it is logged.
+        (Some(error), written) => {
+            if let Err(also) = written {
+                log(format!("error: {also}"));
+            }
+            Err(error)
+        }
+        (None, written) => written.map(|()| Run { summary, state }),
     }
-    drop(solver);
-    drop(system);
-    Ok(Run { summary, state })
 }
 
 /// The figures of one output time.

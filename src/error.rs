@@ -64,19 +64,17 @@ pub enum Error {
     /// The sparse factorization of the step matrix failed.
     #[error("factorization of the step matrix failed: {0}")]
     Factorization(String),
-    /// The nonsmooth solver hit its iteration cap.
+    /// The nonsmooth solver hit its iteration cap, at the step size k and at every cutback.
     #[error(
-        "the {solver} solver did not converge at time step {step} (t = {time}): after {iterations} \
-         {loop_name} iterations the relative increments are {residuals} (tolerance {tolerance:e})"
+        "time step {step} (t = {time}) did not converge{}: {failure}",
+        cutback_phrase(*cutback_depth)
     )]
     NotConverged {
-        solver: &'static str,
-        loop_name: &'static str,
         step: usize,
         time: f64,
-        iterations: usize,
-        residuals: String,
-        tolerance: f64,
+        /// The deepest cutback tried (0: none): substeps of k/2^depth.
+        cutback_depth: usize,
+        failure: crate::solver::StepFailure,
     },
     /// Writing an output file failed.
     #[error(transparent)]
@@ -84,4 +82,11 @@ pub enum Error {
     /// Reading an input file failed.
     #[error("cannot read {}: {source}", path.display())]
     Read { path: PathBuf, source: std::io::Error },
+}
+
+fn cutback_phrase(depth: usize) -> String {
+    match depth {
+        0 => String::new(),
+        d => format!(" even in {} substeps of k/{}", 1usize << d, 1usize << d),
+    }
 }

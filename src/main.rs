@@ -219,8 +219,16 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,
+                log: true,
             };
-            let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)?;
+            let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
+                .inspect_err(|_| {
+                    eprintln!(
+                        "the run stopped; what it computed is in {}/ (solution.pvd with the last completed \
+                         step, summary.json with \"status\": \"failed\")",
+                        out.display()
+                    )
+                })?;
             print_summary(&summary);
             println!(
                 "results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
@@ -462,6 +470,16 @@ fn print_summary(s: &Summary) {
     println!("{:<34} {:>12}", "inner (augmented-Lagrangian) its", s.inner_iterations);
     println!("{:<34} {:>12}", "semismooth Newton iterations", s.newton_iterations);
     println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
+    let deepest = s.cutbacks.iter().map(|c| c.depth).max().unwrap_or(0);
+    println!(
+        "{:<34} {:>12}",
+        "steps cut back (shortest substep)",
+        if deepest == 0 {
+            "0".to_string()
+        } else {
+            format!("{} (k/{})", s.cutbacks.len(), 1usize << deepest)
+        }
+    );
     println!();
     println!("{:<34} {:>10.3} s", "assembly", t.assembly);
     println!("{:<34} {:>10.3} s", "factorization", t.factorization);

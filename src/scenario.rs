@@ -21,6 +21,10 @@ use crate::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
 use crate::solver::system::State;
 use crate::solver::{SolverKind, SolverParams};
 
+/// The deepest cutback a scenario may ask for: 2^20 substeps of one step is already a
+/// different time grid, not a rescue.
+pub const MAX_CUTBACK_DEPTH: usize = 20;
+
 /// The default scenario (the paper's example), with comments.
 pub const DEFAULT_TOML: &str = include_str!("../scenarios/paper.toml");
 
@@ -401,6 +405,8 @@ pub struct SolverSpec {
     pub max_convexification: usize,
     pub inner_tolerance: f64,
     pub max_inner: usize,
+    pub cutback: bool,
+    pub max_cutback_depth: usize,
     pub slip_tolerance: f64,
 }
 
@@ -623,6 +629,13 @@ impl Scenario {
         at_least_one("solver.max_convexification", s.max_convexification)?;
         positive("solver.inner_tolerance", s.inner_tolerance)?;
         at_least_one("solver.max_inner", s.max_inner)?;
+        if s.max_cutback_depth > MAX_CUTBACK_DEPTH {
+            return Err(invalid(
+                "solver.max_cutback_depth",
+                &s.max_cutback_depth,
+                &format!("at most {MAX_CUTBACK_DEPTH} (2^{MAX_CUTBACK_DEPTH} substeps of k/2^{MAX_CUTBACK_DEPTH})"),
+            ));
+        }
         non_negative("solver.slip_tolerance", s.slip_tolerance)?;
 
         for &t in &self.output.times {
@@ -801,6 +814,8 @@ impl Scenario {
             max_convexification: s.max_convexification,
             inner_tolerance: s.inner_tolerance,
             max_inner: s.max_inner,
+            cutback: s.cutback,
+            max_cutback_depth: s.max_cutback_depth,
         }
     }
 

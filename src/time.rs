@@ -1,5 +1,17 @@
 //! Time stepping: t_n = n k, n = 1..N, each step solved by the chosen nonsmooth solver, with
 //! u_n = u_{n−1} + k w_n (eq. (57)) carried in [`State`].
+//!
+//! **Cutback.** A step whose solver does not converge is retried as two substeps of k/2, each
+//! of which may again be halved, down to k/2^depth ([`SolverParams::max_cutback_depth`]). This
+//! is the paper's scheme on a finer grid over that interval, not a different method, and it is
+//! the remedy the theory points to: the step problem's solution is unique (and the solvers
+//! converge) when the law's steepness is small against ρ/k and the viscosity (conditions
+//! (16)–(18)), and halving k halves the contact compliance that the steepness is measured
+//! against. The step matrices of k/2, k/4, … are factored and condensed when a cutback first
+//! needs them and kept for the rest of the run ([`Levels`]). `cutback = false` keeps the
+//! paper's uniform k.
+
+use std::cell::OnceCell;
 
 use serde::Serialize;
 
@@ -8,8 +20,8 @@ use crate::problem::Problem;
 use crate::solver::fast::FastSolver;
 use crate::solver::newton::NewtonParams;
 use crate::solver::paper::{PaperParams, PaperSolver};
-use crate::solver::system::{norm2, State, StepSystem};
-use crate::solver::{SolverKind, SolverParams, StepInfo};
+use crate::solver::system::{norm2, State, StepSystem, SystemStats};
+use crate::solver::{SolveError, SolverKind, SolverParams, StepInfo};
 
 /// The contact state at one node of Γ_C.
 #[derive(Debug, Clone, Serialize)]
@@ -86,7 +98,8 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
         .collect()
 }
 
-/// A nonsmooth solver of one time step, chosen by [`SolverParams::kind`].
+/// A nonsmooth solver of one time step, chosen by [`SolverParams::kind`], with the factored
+/// step matrix of its step size.
 pub enum StepSolver<'a> {
     /// The paper's convexification + augmented Lagrangian.
     Paper(PaperSolver<'a>),
@@ -95,8 +108,8 @@ pub enum StepSolver<'a> {
 }
 
 impl<'a> StepSolver<'a> {
-    /// Sets the chosen solver up (the condensation onto Γ_C).
-    pub fn new(problem: &'a Problem, system: &'a StepSystem, params: &SolverParams) -> Self {
+    /// Sets the chosen solver up on a factored step matrix (the condensation onto Γ_C).
+    pub fn new(problem: &'a Problem, system: StepSystem, params: &SolverParams) -> Self {
         let paper_params = PaperParams {
             tolerance: params.tolerance,
             max_convexification: params.max_convexification,
@@ -108,7 +121,6 @@ impl<'a> StepSolver<'a> {
             SolverKind::Paper => StepSolver::Paper(paper),
             SolverKind::Fast => StepSolver::Fast(FastSolver::new(
                 problem,
-                system,
                 paper,
                 paper_params,
                 NewtonParams {
@@ -119,28 +131,144 @@ impl<'a> StepSolver<'a> {
         }
     }
 
-    /// One step from t_{n−1} to t_n.
-    pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
+    /// One step of the solver's step size, from `previous` to time `t`.
+    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         match self {
-            StepSolver::Paper(solver) => solver.step(previous),
-            StepSolver::Fast(solver) => solver.step(previous),
+            StepSolver::Paper(solver) => solver.step(previous, t),
+            StepSolver::Fast(solver) => solver.step(previous, t),
+        }
+    }
+
+    /// The factored step matrix.
+    pub fn system(&self) -> &StepSystem {
+        match self {
+            StepSolver::Paper(solver) => solver.system(),
+            StepSolver::Fast(solver) => solver.system(),
         }
     }
 }
 
-/// The time loop: steps n = 1 … N from the initial state (10); `observer` sees every new state
-/// with the step's solver figures and may stop the run with an error. Every run goes through
-/// here ([`crate::driver`] observes it for output, progress and timings).
+/// The step solvers of step sizes k, k/2, k/4, … (cutback levels 0, 1, 2, …): level 0 is
+/// given, the others are factored when a cutback first needs them and kept.
+pub struct Levels<'a> {
+    problem: &'a Problem,
+    params: SolverParams,
+    levels: Vec<OnceCell<StepSolver<'a>>>,
+}
+
+impl<'a> Levels<'a> {
+    /// The levels over a solver of the problem's step size k.
+    pub fn new(problem: &'a Problem, params: &SolverParams, first: StepSolver<'a>) -> Self {
+        let depth = if params.cutback { params.max_cutback_depth } else { 0 };
+        let levels: Vec<OnceCell<StepSolver<'a>>> = (0..=depth).map(|_| OnceCell::new()).collect();
+        let _ = levels[0].set(first);
+        Levels {
+            problem,
+            params: *params,
+            levels,
+        }
+    }
+
+    /// Sets up level 0 (factorization and condensation) and the empty deeper levels.
+    pub fn build(problem: &'a Problem, params: &SolverParams) -> Result<Self, Error> {
+        let system = StepSystem::new(problem)?;
+        Ok(Levels::new(problem, params, StepSolver::new(problem, system, params)))
+    }
+
+    /// The deepest level a cutback may use.
+    pub fn max_depth(&self) -> usize {
+        self.levels.len() - 1
+    }
+
+    /// The solver of step size k/2^depth, made on first use.
+    pub fn level(&self, depth: usize) -> Result<&StepSolver<'a>, Error> {
+        let cell = &self.levels[depth];
+        if let Some(solver) = cell.get() {
+            return Ok(solver);
+        }
+        let k = self.problem.time_step() / (1u64 << depth) as f64;
+        let system = StepSystem::with_step(self.problem, k)?;
+        Ok(cell.get_or_init(|| StepSolver::new(self.problem, system, &self.params)))
+    }
+
+    /// The solver of the problem's own step size.
+    pub fn first(&self) -> &StepSolver<'a> {
+        self.levels[0].get().expect("level 0 is set at construction")
+    }
+
+    /// Work counters summed over the levels made so far.
+    pub fn stats(&self) -> SystemStats {
+        self.levels
+            .iter()
+            .filter_map(|cell| cell.get())
+            .map(|solver| solver.system().stats())
+            .fold(SystemStats::default(), |a, b| SystemStats {
+                solves: a.solves + b.solves,
+                solve_seconds: a.solve_seconds + b.solve_seconds,
+                rhs_seconds: a.rhs_seconds + b.rhs_seconds,
+            })
+    }
+
+    /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next
+    /// level where it does not converge; `n` is the time level being computed (for errors).
+    fn advance(&self, previous: &State, t: f64, depth: usize, n: usize) -> Result<(State, StepInfo), Error> {
+        match self.level(depth)?.step(previous, t) {
+            Ok((state, mut info)) => {
+                info.substeps = 1;
+                info.cutback_depth = depth;
+                Ok((state, info))
+            }
+            Err(SolveError::Other(error)) => Err(error),
+            Err(SolveError::NotConverged(failure)) => {
+                if depth >= self.max_depth() {
+                    return Err(Error::NotConverged {
+                        step: n,
+                        time: t,
+                        cutback_depth: depth,
+                        failure,
+                    });
+                }
+                let middle = previous.t + 0.5 * (t - previous.t);
+                let (half, mut info) = self.advance(previous, middle, depth + 1, n)?;
+                let (end, rest) = self.advance(&half, t, depth + 1, n)?;
+                info.absorb(&rest);
+                Ok((end, info))
+            }
+        }
+    }
+}
+
+/// A run that stopped: why, and the last state it reached (t_n of the last completed step).
+#[derive(Debug)]
+pub struct Stopped {
+    pub error: Error,
+    pub last: State,
+}
+
+/// The time loop: steps n = 1 … N from the initial state (10), each cut back where it does not
+/// converge; `observer` sees every new state with the step's solver figures and may stop the
+/// run with an error. Every run goes through here ([`crate::driver`] observes it for output,
+/// progress and timings).
 pub fn march(
     problem: &Problem,
-    solver: &StepSolver,
+    levels: &Levels,
     mut observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
-) -> Result<State, Error> {
+) -> Result<State, Box<Stopped>> {
     let mut state = State::initial(problem);
-    for _ in 0..problem.time.steps {
-        let (next, info) = solver.step(&state)?;
-        observer(&next, &info)?;
-        state = next;
+    let k = problem.time_step();
+    for n in 1..=problem.time.steps {
+        let t = n as f64 * k;
+        let step = levels.advance(&state, t, 0, n).and_then(|(mut next, info)| {
+            // Substeps advanced the level once each; t_n is n k exactly.
+            next.n = n;
+            next.t = t;
+            observer(&next, &info)?;
+            Ok(next)
+        });
+        match step {
+            Ok(next) => state = next,
+            Err(error) => return Err(Box::new(Stopped { error, last: state })),
+        }
     }
     Ok(state)
 }
@@ -148,9 +276,8 @@ pub fn march(
 /// Sets the solver up and runs all N steps ([`march`]).
 pub fn run(
     problem: &Problem,
-    system: &StepSystem,
     params: &SolverParams,
     observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
 ) -> Result<State, Error> {
-    march(problem, &StepSolver::new(problem, system, params), observer)
+    march(problem, &Levels::build(problem, params)?, observer).map_err(|stopped| stopped.error)
 }

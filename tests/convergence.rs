@@ -10,7 +10,6 @@
 
 use std::process::Command;
 
-use thermocontact::solver::system::StepSystem;
 use thermocontact::time::{self, contact_rows};
 use thermocontact::verification::manufactured::Manufactured;
 use thermocontact::verification::study::{self, LevelRun, StudyReport};
@@ -91,10 +90,9 @@ fn manufactured_contact_has_the_exact_stick_and_slip_zones() {
         .extra_loads(Box::new(exact))
         .build()
         .unwrap();
-    let system = StepSystem::new(&problem).unwrap();
     let tolerance = scenario.solver.slip_tolerance;
     let (mut stick, mut slip) = (0, 0);
-    time::run(&problem, &system, &scenario.solver_params(), |state, _| {
+    time::run(&problem, &scenario.solver_params(), |state, _| {
         if state.n == 4 {
             let t = 0.5;
             for row in contact_rows(&problem, state, tolerance) {

@@ -76,9 +76,8 @@ fn run(problem: &Problem, kind: SolverKind) -> Vec<(State, usize)> {
         kind,
         ..SolverParams::default()
     };
-    let system = thermocontact::solver::system::StepSystem::new(problem).unwrap();
     let mut states = Vec::new();
-    thermocontact::time::run(problem, &system, &params, |state, _| {
+    thermocontact::time::run(problem, &params, |state, _| {
         let slip = contact_rows(problem, state, 1e-6).iter().filter(|r| r.slip).count();
         states.push((state.clone(), slip));
         Ok(())

@@ -5,6 +5,7 @@ use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::law_residual;
 use thermocontact::solver::condensed::Condensation;
 use thermocontact::solver::system::{add_contact_terms, tangential_velocities, State, StepSystem};
+use thermocontact::solver::{Criterion, SolveError};
 use thermocontact::time::{contact_rows, StepSolver};
 use thermocontact::Scenario;
 
@@ -22,8 +23,8 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
     let scenario = coarse(&["friction.bound=0.0", "material.thermal_expansion=0.0"]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
-    let (state, _) = solver.step(&State::initial(&problem)).unwrap();
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
+    let (state, _) = solver.step(&State::initial(&problem), problem.time_step()).unwrap();
 
     let k = problem.time_step();
     let n = problem.velocity.n_free;
@@ -94,12 +95,12 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     let scenario = coarse(&[]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
     let mut state = State::initial(&problem);
     let tol = scenario.solver.slip_tolerance;
     let mut slipped = 0;
     for _ in 0..scenario.time.steps {
-        state = solver.step(&state).unwrap().0;
+        state = solver.step(&state, state.t + problem.time_step()).unwrap().0;
         for row in contact_rows(&problem, &state, tol) {
             let residual = law_residual(problem.friction.as_ref(), &row.w_tau[..1], &row.xi[..1], tol);
             assert!(
@@ -126,9 +127,10 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     assert_eq!(last.u, state.u, "the driver runs the same steps");
 }
 
-/// A solver that hits its iteration cap says where (step, time) and by how much.
+/// A solver that hits its iteration cap names the loop and the criterion that failed, with its
+/// value above the tolerance.
 #[test]
-fn non_convergence_is_reported_with_step_and_increments() {
+fn non_convergence_names_the_failed_criterion_and_its_value() {
     for kind in ["paper", "fast"] {
         let scenario = coarse(&[
             &format!("solver.kind={kind}"),
@@ -137,23 +139,37 @@ fn non_convergence_is_reported_with_step_and_increments() {
         ]);
         let problem = scenario.build().unwrap();
         let system = StepSystem::new(&problem).unwrap();
-        let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
+        let solver = StepSolver::new(&problem, system, &scenario.solver_params());
         let mut state = State::initial(&problem);
-        let error = loop {
-            match solver.step(&state) {
+        let failure = loop {
+            match solver.step(&state, state.t + problem.time_step()) {
                 Ok((next, _)) => state = next,
-                Err(e) => break e,
+                Err(SolveError::NotConverged(failure)) => break failure,
+                Err(SolveError::Other(e)) => panic!("{kind}: {e}"),
             }
             assert!(
                 state.n < scenario.time.steps,
                 "{kind}: a single convexification iterate cannot meet 1e-14 all the way"
             );
         };
-        let message = error.to_string();
-        assert!(message.contains("did not converge at time step"), "{message}");
-        assert!(message.contains("convexification"), "{message}");
+        // The failure names the criterion that failed, past its tolerance, not one that passed.
+        assert_eq!(failure.loop_name, "convexification", "{failure}");
+        assert_eq!(failure.iterations, 1);
+        assert_eq!(failure.tolerance, 1e-14);
+        assert!(failure.value > failure.tolerance, "{failure}");
+        let message = failure.to_string();
+        assert!(message.contains(failure.criterion.describe()), "{message}");
         if kind == "paper" {
-            assert!(message.contains("(77)") && message.contains("(80)"), "{message}");
+            assert!(
+                matches!(
+                    failure.criterion,
+                    Criterion::IncrementU
+                        | Criterion::IncrementTheta
+                        | Criterion::IncrementXi
+                        | Criterion::IncrementZeta
+                ),
+                "{failure}"
+            );
         }
     }
 }

@@ -187,13 +187,13 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
     .unwrap();
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, &system, &scenario.solver_params());
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
     let law = problem.friction.as_ref();
     let tol = scenario.solver.slip_tolerance;
     let mut state = State::initial(&problem);
     let (mut slip, mut stick, mut oblique) = (0, 0, 0);
     for _ in 0..scenario.time.steps {
-        state = solver.step(&state).unwrap().0;
+        state = solver.step(&state, state.t + problem.time_step()).unwrap().0;
         for row in contact_rows(&problem, &state, tol) {
             let residual = law_residual(law, &row.w_tau, &row.xi, tol);
             assert!(

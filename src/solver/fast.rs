@@ -9,14 +9,12 @@ use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{contact_tangential, PaperParams, PaperSolver};
 use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
-use super::StepInfo;
-use crate::error::Error;
+use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::problem::Problem;
 
 /// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`].
 pub struct FastSolver<'a> {
     problem: &'a Problem,
-    system: &'a StepSystem,
     paper: PaperSolver<'a>,
     paper_params: PaperParams,
     params: NewtonParams,
@@ -25,20 +23,13 @@ pub struct FastSolver<'a> {
 
 impl<'a> FastSolver<'a> {
     /// Sets the solver up (the condensation is shared with the fallback solver).
-    pub fn new(
-        problem: &'a Problem,
-        system: &'a StepSystem,
-        paper: PaperSolver<'a>,
-        paper_params: PaperParams,
-        params: NewtonParams,
-    ) -> Self {
+    pub fn new(problem: &'a Problem, paper: PaperSolver<'a>, paper_params: PaperParams, params: NewtonParams) -> Self {
         let condensation = paper.condensation();
         let n_t = condensation.n_t;
         let max_compliance = (0..n_t).map(|i| condensation.friction[i * n_t + i]).fold(0.0, f64::max);
         let steepness = max_compliance * (-problem.friction.bound_derivative(0.0)).max(0.0);
         FastSolver {
             problem,
-            system,
             paper,
             paper_params,
             params,
@@ -58,15 +49,19 @@ impl<'a> FastSolver<'a> {
         self.paper.condensation()
     }
 
-    /// One time step: from the state at t_{n−1} to the state at t_n.
-    pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
+    /// The factored step matrix (shared with the fallback solver).
+    pub fn system(&self) -> &StepSystem {
+        self.paper.system()
+    }
+
+    /// One step of the system's size k, from `previous` to the state at time `t`.
+    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let problem = self.problem;
+        let system = self.system();
         let tangential = problem.dim() - 1;
-        let n = previous.n + 1;
-        let t = n as f64 * problem.time_step();
-        let base = self.system.rhs(problem, previous, t)?;
+        let base = system.rhs(problem, previous, t)?;
         let mut x = base.clone();
-        self.system.solve_in_place(&mut x);
+        system.solve_in_place(&mut x);
         let w_free = tangential_velocities(problem, &x);
 
         let step = CondensedStep {
@@ -98,15 +93,7 @@ impl<'a> FastSolver<'a> {
                     info.newton_iterations = self.params.max_iterations;
                 }
                 self.convexified(&step, &w_free, guess_w, guess_xi, &mut info)
-                    .map_err(|residuals| Error::NotConverged {
-                        solver: "fast",
-                        loop_name: "convexification",
-                        step: n,
-                        time: t,
-                        iterations: info.convexification_iterations,
-                        residuals,
-                        tolerance: self.paper_params.tolerance,
-                    })?
+                    .map_err(SolveError::NotConverged)?
             }
         };
         let heat: Vec<f64> = (0..problem.contact.len())
@@ -119,14 +106,14 @@ impl<'a> FastSolver<'a> {
         let xi = result.xi;
         x.copy_from_slice(&base);
         add_contact_terms(problem, problem.n_w(), &xi, &heat, &mut x);
-        self.system.solve_in_place(&mut x);
-        let state = self.system.state_from(problem, previous, &x, xi);
+        system.solve_in_place(&mut x);
+        let state = system.state_from(problem, previous, t, &x, xi);
         Ok((state, info))
     }
 
     /// The convexification loop of Problem 17 on the condensed problem, each convex problem
     /// solved by semismooth Newton; stops when w and ξ on Γ_C change by less than ε_conv
-    /// (relative to their largest values).
+    /// (relative to their largest values) and the nonmonotone law holds at every node.
     fn convexified(
         &self,
         step: &CondensedStep,
@@ -134,22 +121,28 @@ impl<'a> FastSolver<'a> {
         mut w: Vec<f64>,
         mut xi: Vec<f64>,
         info: &mut StepInfo,
-    ) -> Result<NewtonResult, String> {
+    ) -> Result<NewtonResult, StepFailure> {
         let t = step.tangential;
         let n_nodes = self.problem.contact.len();
-        let mut last = String::new();
+        let tolerance = self.paper_params.tolerance;
+        let mut checks = Vec::new();
         for m in 1..=self.paper_params.max_convexification {
             let bounds: Vec<f64> = (0..n_nodes)
                 .map(|i| self.problem.friction.bound(norm(&w[i * t..(i + 1) * t])))
                 .collect();
-            let inner = step
-                .solve(w_free, w.clone(), xi.clone(), Some(&bounds), self.params)
-                .ok_or_else(|| {
-                    format!(
-                        "semismooth Newton on convex subproblem {m} stalled after {} iterations",
-                        self.params.max_iterations
-                    )
-                })?;
+            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+            let Some(inner) = step.solve(w_free, w.clone(), xi.clone(), Some(&bounds), self.params) else {
+                // The convex subproblem's Newton stalled: report how far the current iterate is
+                // from solving the step (the nonmonotone law at the nodes).
+                return Err(StepFailure {
+                    solver: "fast",
+                    loop_name: "semismooth Newton (convex subproblem)",
+                    iterations: self.params.max_iterations,
+                    criterion: Criterion::NodalLaw,
+                    value: step.residuals(w_free, &w, &xi, None).1 / g_min.max(f64::MIN_POSITIVE),
+                    tolerance,
+                });
+            };
             info.newton_iterations += inner.iterations;
             info.convexification_iterations = m;
             let dw = max_diff(&inner.w, &w);
@@ -158,16 +151,19 @@ impl<'a> FastSolver<'a> {
             let g_scale = bounds.iter().fold(0.0f64, |s, v| s.max(*v));
             w = inner.w;
             xi = inner.xi;
-            last = format!(
-                "max |Δw_τ| / max |w_τ| = {:.3e}, max |Δξ| / max bound = {:.3e}",
-                dw / w_scale.max(f64::MIN_POSITIVE),
-                dxi / g_scale.max(f64::MIN_POSITIVE)
-            );
             // The frozen bounds lag one iterate behind; also require the nonmonotone law itself
             // to hold to the tolerance at every node (relative to the smallest bound).
-            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
-            let settled = dw <= self.paper_params.tolerance * w_scale && dxi <= self.paper_params.tolerance * g_scale;
-            if settled && step.residuals(w_free, &w, &xi, None).1 <= self.paper_params.tolerance * g_min {
+            let law = step.residuals(w_free, &w, &xi, None).1;
+            checks = vec![
+                (Criterion::IncrementW, dw / w_scale.max(f64::MIN_POSITIVE), tolerance),
+                (
+                    Criterion::IncrementXiNodal,
+                    dxi / g_scale.max(f64::MIN_POSITIVE),
+                    tolerance,
+                ),
+                (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), tolerance),
+            ];
+            if checks.iter().all(|&(_, value, tol)| value <= tol) {
                 return Ok(NewtonResult {
                     w,
                     xi,
@@ -175,7 +171,15 @@ impl<'a> FastSolver<'a> {
                 });
             }
         }
-        Err(last)
+        let (criterion, value, tolerance) = worst_criterion(&checks);
+        Err(StepFailure {
+            solver: "fast",
+            loop_name: "convexification",
+            iterations: self.paper_params.max_convexification,
+            criterion,
+            value,
+            tolerance,
+        })
     }
 }
 

@@ -13,6 +13,7 @@ pub mod system;
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::Error;
 use crate::norms;
 use crate::problem::Problem;
 use system::State;
@@ -51,6 +52,10 @@ pub struct SolverParams {
     pub inner_tolerance: f64,
     /// Cap on inner Uzawa iterations per convex problem.
     pub max_inner: usize,
+    /// Retry a step that fails as 2, 4, … substeps of k/2, k/4, … ([`crate::time::march`]).
+    pub cutback: bool,
+    /// The deepest cutback: at most 2^depth substeps of k/2^depth.
+    pub max_cutback_depth: usize,
 }
 
 impl Default for SolverParams {
@@ -61,6 +66,8 @@ impl Default for SolverParams {
             max_convexification: 200,
             inner_tolerance: 1e-10,
             max_inner: 20_000,
+            cutback: true,
+            max_cutback_depth: 5,
         }
     }
 }
@@ -79,6 +86,126 @@ pub struct StepInfo {
     pub newton_iterations: usize,
     /// The fast solver went through the convexification loop in this step.
     pub fallback: bool,
+    /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
+    pub substeps: usize,
+    /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
+    pub cutback_depth: usize,
+}
+
+impl StepInfo {
+    /// Adds the figures of a substep.
+    pub fn absorb(&mut self, other: &StepInfo) {
+        self.convexification_iterations += other.convexification_iterations;
+        self.inner_iterations += other.inner_iterations;
+        self.newton_iterations += other.newton_iterations;
+        self.increments = other.increments;
+        self.fallback |= other.fallback;
+        self.substeps += other.substeps;
+        self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
+    }
+}
+
+/// A stop criterion of a step solver, as it is reported when it fails.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Criterion {
+    /// (77): ‖Δu‖_E / ‖u‖_E between convexification iterates.
+    IncrementU,
+    /// (78): ‖Δθ‖_V / ‖θ‖_V.
+    IncrementTheta,
+    /// (79): ‖Δξ‖_{L²(Γ_C)} / ‖ξ‖_{L²(Γ_C)}.
+    IncrementXi,
+    /// (80): ‖Δζ‖_{L²(Γ_C)} / ‖ζ‖_{L²(Γ_C)}.
+    IncrementZeta,
+    /// max |Δw_τ| / max |w_τ| between iterates on Γ_C.
+    IncrementW,
+    /// max |Δξ| / max friction bound between iterates on Γ_C (also the inner Uzawa loop's).
+    IncrementXiNodal,
+    /// max_i |ξ_i − P_{b(|w_i|)}(ξ_i − r w_i)| / min_i b(|w_i|): the nonmonotone friction law
+    /// itself at the nodes.
+    NodalLaw,
+    /// A linear solve of the Newton method gave a non-finite update.
+    NonFiniteUpdate,
+}
+
+impl Criterion {
+    /// What the criterion measures, for messages.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Criterion::IncrementU => "relative increment of u (77)",
+            Criterion::IncrementTheta => "relative increment of θ (78)",
+            Criterion::IncrementXi => "relative increment of ξ (79)",
+            Criterion::IncrementZeta => "relative increment of ζ (80)",
+            Criterion::IncrementW => "max |Δw_τ| / max |w_τ|",
+            Criterion::IncrementXiNodal => "max |Δξ| / max friction bound",
+            Criterion::NodalLaw => "nodal friction-law residual / smallest bound",
+            Criterion::NonFiniteUpdate => "non-finite Newton update",
+        }
+    }
+}
+
+/// Why a step solver gave up: the loop, how long it ran, and the criterion that failed with its
+/// value and tolerance (the worst one against its tolerance, never one that passed).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepFailure {
+    /// `paper` or `fast`.
+    pub solver: &'static str,
+    /// The loop that hit its cap: `convexification`, `inner augmented-Lagrangian`, …
+    pub loop_name: &'static str,
+    pub iterations: usize,
+    pub criterion: Criterion,
+    /// May be +∞ (a relative increment against a zero previous iterate): JSON gets "inf".
+    #[serde(serialize_with = "number_or_text")]
+    pub value: f64,
+    pub tolerance: f64,
+}
+
+/// A finite number as a JSON number, ±∞ and NaN (which JSON lacks) as the strings "inf",
+/// "-inf", "NaN".
+fn number_or_text<S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    if value.is_finite() {
+        serializer.serialize_f64(*value)
+    } else {
+        serializer.serialize_str(&value.to_string())
+    }
+}
+
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the {} solver's {} loop stopped after {} iterations: {} = {:.3e} > tolerance {:e}",
+            self.solver,
+            self.loop_name,
+            self.iterations,
+            self.criterion.describe(),
+            self.value,
+            self.tolerance
+        )
+    }
+}
+
+/// How one step solve ends when it does not return a state.
+#[derive(Debug)]
+pub enum SolveError {
+    /// The nonsmooth solver did not converge: the time loop may cut the step back.
+    NotConverged(StepFailure),
+    /// Anything else (a load that evaluates to NaN, …): the run stops.
+    Other(Error),
+}
+
+impl From<Error> for SolveError {
+    fn from(e: Error) -> Self {
+        SolveError::Other(e)
+    }
+}
+
+/// The worst of several (criterion, value, tolerance): the one furthest past its tolerance.
+pub fn worst_criterion(checks: &[(Criterion, f64, f64)]) -> (Criterion, f64, f64) {
+    *checks
+        .iter()
+        .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))
+        .expect("at least one criterion")
 }
 
 /// Relative increments (77)–(80) between two iterates of one time step.

@@ -18,9 +18,8 @@
 
 use super::condensed::Condensation;
 use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
-use super::{increments_converged, relative_increments, StepInfo};
+use super::{increments_converged, relative_increments, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
-use crate::error::Error;
 use crate::problem::Problem;
 
 /// Settings of the paper's solver.
@@ -39,7 +38,7 @@ pub struct PaperParams {
 /// The convexification + augmented-Lagrangian solver.
 pub struct PaperSolver<'a> {
     problem: &'a Problem,
-    system: &'a StepSystem,
+    system: StepSystem,
     condensation: Condensation,
     params: PaperParams,
     /// Augmentation (Uzawa step) parameter r.
@@ -48,8 +47,8 @@ pub struct PaperSolver<'a> {
 
 impl<'a> PaperSolver<'a> {
     /// Sets the solver up: condenses onto Γ_C and picks the augmentation parameter.
-    pub fn new(problem: &'a Problem, system: &'a StepSystem, params: PaperParams) -> Self {
-        let condensation = Condensation::new(problem, system);
+    pub fn new(problem: &'a Problem, system: StepSystem, params: PaperParams) -> Self {
+        let condensation = Condensation::new(problem, &system);
         let lambda_max = condensation.friction_spectral_bound();
         let augmentation = if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 };
         PaperSolver {
@@ -61,17 +60,21 @@ impl<'a> PaperSolver<'a> {
         }
     }
 
+    /// The factored step matrix (of step size k).
+    pub fn system(&self) -> &StepSystem {
+        &self.system
+    }
+
     /// The condensed compliances on Γ_C.
     pub fn condensation(&self) -> &Condensation {
         &self.condensation
     }
 
-    /// One time step: from the state at t_{n−1} to the state at t_n.
-    pub fn step(&self, previous: &State) -> Result<(State, StepInfo), Error> {
+    /// One step of the system's size k, from `previous` to the state at time `t`.
+    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let problem = self.problem;
         let tangential = problem.dim() - 1;
-        let n = previous.n + 1;
-        let t = n as f64 * problem.time_step();
+        let k = self.system.step_size();
         let n_w = problem.n_w();
         let n_contact = problem.contact.len();
         let base = self.system.rhs(problem, previous, t)?;
@@ -81,13 +84,9 @@ impl<'a> PaperSolver<'a> {
 
         // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
         let mut current = previous.clone();
-        current.n = n;
-        current.u = previous
-            .u
-            .iter()
-            .zip(&previous.w)
-            .map(|(u, w)| u + problem.time_step() * w)
-            .collect();
+        current.n = previous.n + 1;
+        current.t = t;
+        current.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
         let mut xi = previous.xi.clone();
         let mut w = contact_tangential(problem, &previous.w);
         let speed = |w: &[f64], i: usize| {
@@ -138,22 +137,21 @@ impl<'a> PaperSolver<'a> {
                 }
             }
             if !converged {
-                return Err(Error::NotConverged {
+                return Err(SolveError::NotConverged(StepFailure {
                     solver: "paper",
                     loop_name: "inner augmented-Lagrangian",
-                    step: n,
-                    time: t,
                     iterations: self.params.max_inner,
-                    residuals: format!("max |Δξ| = {change:.3e} N/m against max bound {g_max:.3e} N/m"),
+                    criterion: Criterion::IncrementXiNodal,
+                    value: change / g_max,
                     tolerance: self.params.inner_tolerance,
-                });
+                }));
             }
             // The full fields of this iterate: one solve with the converged contact terms.
             self.condensation.velocities(&w_free, &xi, &heat, &mut w);
             x.copy_from_slice(&base);
             add_contact_terms(problem, n_w, &xi, &heat, &mut x);
             self.system.solve_in_place(&mut x);
-            let next = self.system.state_from(problem, previous, &x, xi.clone());
+            let next = self.system.state_from(problem, previous, t, &x, xi.clone());
             let increments = relative_increments(problem, &current, &next);
             info.convexification_iterations = m + 1;
             info.increments = increments;
@@ -162,24 +160,28 @@ impl<'a> PaperSolver<'a> {
                 return Ok((current, info));
             }
         }
-        Err(Error::NotConverged {
+        let tolerance = self.params.tolerance;
+        let criteria = [
+            Criterion::IncrementU,
+            Criterion::IncrementTheta,
+            Criterion::IncrementXi,
+            Criterion::IncrementZeta,
+        ];
+        let checks: Vec<(Criterion, f64, f64)> = criteria
+            .into_iter()
+            .zip(info.increments)
+            .map(|(c, v)| (c, v, tolerance))
+            .collect();
+        let (criterion, value, _) = worst_criterion(&checks);
+        Err(SolveError::NotConverged(StepFailure {
             solver: "paper",
             loop_name: "convexification",
-            step: n,
-            time: t,
             iterations: self.params.max_convexification,
-            residuals: format_increments(&info.increments),
-            tolerance: self.params.tolerance,
-        })
+            criterion,
+            value,
+            tolerance,
+        }))
     }
-}
-
-/// "u: …, θ: …, ξ: …, ζ: …" for error messages.
-pub fn format_increments(inc: &[f64; 4]) -> String {
-    format!(
-        "u (77): {:.3e}, θ (78): {:.3e}, ξ (79): {:.3e}, ζ (80): {:.3e}",
-        inc[0], inc[1], inc[2], inc[3]
-    )
 }
 
 /// Tangential velocities at the contact nodes from a full velocity vector: node-major, in each

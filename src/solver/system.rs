@@ -24,8 +24,10 @@ use crate::problem::Problem;
 /// The state carried from step to step, as full nodal vectors.
 #[derive(Debug, Clone)]
 pub struct State {
-    /// Time level n.
+    /// Time level n (the substeps of a cut-back step do not count).
     pub n: usize,
+    /// Its time t_n (a substep's own time inside a cut-back step).
+    pub t: f64,
     /// W_n: velocity, d per node.
     pub w: Vec<f64>,
     /// U_n = U_{n−1} + k W_n: displacement, d per node.
@@ -43,6 +45,7 @@ impl State {
         let initial = &problem.initial;
         State {
             n: 0,
+            t: 0.0,
             w: initial.velocity.clone(),
             u: initial.displacement.clone(),
             theta: initial.temperature.clone(),
@@ -77,9 +80,13 @@ pub struct StepSystem {
 }
 
 impl StepSystem {
-    /// Assembles the reduced step matrix for time step k and factors it.
+    /// Assembles the reduced step matrix for the problem's time step k and factors it.
     pub fn new(problem: &Problem) -> Result<Self, Error> {
-        let k = problem.time_step();
+        Self::with_step(problem, problem.time_step())
+    }
+
+    /// The same for a step size k of one's own (the substeps of a cut-back step).
+    pub fn with_step(problem: &Problem, k: f64) -> Result<Self, Error> {
         let (vel, temp) = (&problem.velocity, &problem.temperature);
         let n_w = vel.n_free;
         let n = n_w + temp.n_free;
@@ -130,6 +137,11 @@ impl StepSystem {
             k,
             stats: Mutex::new(SystemStats::default()),
         })
+    }
+
+    /// The step size k the matrix was made for.
+    pub fn step_size(&self) -> f64 {
+        self.k
     }
 
     /// Number of unknowns.
@@ -201,8 +213,8 @@ impl StepSystem {
         });
     }
 
-    /// The new state from the solution x of step n.
-    pub fn state_from(&self, problem: &Problem, previous: &State, x: &[f64], xi: Vec<f64>) -> State {
+    /// The new state at time t from the solution x of the step from `previous`.
+    pub fn state_from(&self, problem: &Problem, previous: &State, t: f64, x: &[f64], xi: Vec<f64>) -> State {
         let w = problem.velocity.prolong(&x[..self.n_w]);
         let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
         let theta = problem
@@ -214,6 +226,7 @@ impl StepSystem {
             .collect();
         State {
             n: previous.n + 1,
+            t,
             w,
             u,
             theta,

@@ -33,7 +33,7 @@ use crate::output::convergence_plot::{write_convergence_plot, Curve};
 use crate::output::{self, OutputError};
 use crate::problem::Problem;
 use crate::scenario::Scenario;
-use crate::solver::system::{State, StepSystem};
+use crate::solver::system::State;
 use crate::time;
 
 /// The largest number of levels: level 8 (h = 1/256) already has 1024 × 256 cells per level for
@@ -162,9 +162,8 @@ fn run_level(
     mut observe: impl FnMut(&State) -> Result<(), Error>,
 ) -> Result<LevelRun, Error> {
     let clock = Instant::now();
-    let system = StepSystem::new(problem)?;
     let (mut outer, mut inner) = (0, 0);
-    let last = time::run(problem, &system, &scenario.solver_params(), |state, info| {
+    let last = time::run(problem, &scenario.solver_params(), |state, info| {
         outer += info.convexification_iterations;
         inner += info.inner_iterations;
         observe(state)
@@ -309,6 +308,7 @@ pub fn manufactured(n_levels: usize, progress: &mut dyn FnMut(&LevelRun)) -> Res
             if finest {
                 let zero = State {
                     n: state.n,
+                    t: state.t,
                     w: vec![0.0; state.w.len()],
                     u: vec![0.0; state.u.len()],
                     theta: vec![0.0; state.theta.len()],

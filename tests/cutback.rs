@@ -1,0 +1,191 @@
+//! Runs that do not die, and runs that die without losing anything: a step that does not
+//! converge is cut back into substeps; a run that still stops leaves its frames, its last
+//! completed state and a summary that says what failed, by how much.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use thermocontact::contact::friction::law_residual;
+use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
+use thermocontact::time::{contact_rows, Levels};
+use thermocontact::Scenario;
+
+fn coarse(overrides: &[&str]) -> Scenario {
+    let mut all = vec![
+        "mesh.nx=16".to_string(),
+        "mesh.ny=4".to_string(),
+        "time.steps=16".to_string(),
+    ];
+    all.extend(overrides.iter().map(|s| s.to_string()));
+    Scenario::load(None, &all).unwrap()
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermocontact-cutback-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Five convexification iterations are not enough at step 6 of the coarse example (it needs
+/// seven at k = 1/16): without cutback the run stops there.
+const STARVED: [&str; 1] = ["solver.max_convexification=5"];
+
+#[test]
+fn a_starved_solver_is_rescued_by_cutback_and_every_step_satisfies_the_law() {
+    let scenario = coarse(&STARVED);
+    let problem = scenario.build().unwrap();
+    let params = scenario.solver_params();
+    assert!(params.cutback, "cutback is on by default");
+    let law = problem.friction.as_ref();
+    let tolerance = scenario.solver.slip_tolerance;
+    let mut worst: f64 = 0.0;
+    let run = driver::run_observed(
+        &problem,
+        &params,
+        &OutputPlan::default(),
+        &RunOptions::default(),
+        |problem, state, _| {
+            for row in contact_rows(problem, state, tolerance) {
+                worst = worst.max(law_residual(law, &row.w_tau, &row.xi, tolerance) / law.bound(0.0));
+            }
+        },
+    )
+    .unwrap();
+    let summary = run.summary;
+    assert_eq!(summary.status, RunStatus::Completed);
+    assert_eq!(run.state.n, 16);
+    assert!(
+        summary.cutbacks.iter().any(|c| c.step == 6),
+        "step 6 needs a cutback: {:?}",
+        summary.cutbacks
+    );
+    for c in &summary.cutbacks {
+        assert!(c.depth >= 1 && c.substeps >= 2 && c.substeps <= 1 << c.depth, "{c:?}");
+        assert!((c.t - c.step as f64 / 16.0).abs() < 1e-12);
+    }
+    assert!(worst <= 1e-6, "nodal law residual {worst:e} (relative to μ(0)S)");
+
+    // Without cutback the same run stops at step 6, naming the criterion that failed.
+    let mut no_cutback = params;
+    no_cutback.cutback = false;
+    let error = driver::run(&problem, &no_cutback, &OutputPlan::default(), &RunOptions::default()).unwrap_err();
+    match error {
+        thermocontact::Error::NotConverged {
+            step,
+            cutback_depth,
+            failure,
+            ..
+        } => {
+            assert_eq!(step, 6);
+            assert_eq!(cutback_depth, 0);
+            assert_eq!(failure.iterations, 5);
+            assert!(failure.value > failure.tolerance, "{failure}");
+        }
+        other => panic!("{other}"),
+    }
+}
+
+/// Two substeps of k/2 are two steps of the problem with 2N steps: the cutback levels step to
+/// the right times with the right matrices.
+#[test]
+fn two_substeps_of_half_size_are_the_run_with_twice_the_steps() {
+    let coarse_steps = coarse(&[]);
+    let fine = coarse(&["time.steps=32"]);
+    let problem = coarse_steps.build().unwrap();
+    let fine_problem = fine.build().unwrap();
+    let params = coarse_steps.solver_params();
+    let levels = Levels::build(&problem, &params).unwrap();
+    let half = levels.level(1).unwrap();
+    assert_eq!(half.system().step_size(), problem.time_step() / 2.0);
+
+    let mut fine_states = Vec::new();
+    thermocontact::time::run(&fine_problem, &params, |state, _| {
+        fine_states.push(state.clone());
+        Ok(())
+    })
+    .unwrap();
+
+    let mut state = thermocontact::solver::system::State::initial(&problem);
+    let k = problem.time_step();
+    for n in 1..=4 {
+        let middle = state.t + k / 2.0;
+        state = half.step(&state, middle).unwrap().0;
+        state = half.step(&state, n as f64 * k).unwrap().0;
+        let reference = &fine_states[2 * n - 1];
+        assert!((state.t - reference.t).abs() < 1e-15);
+        let scale = reference.u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = state
+            .u
+            .iter()
+            .zip(&reference.u)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(diff <= 1e-10 * scale, "step {n}: {diff:e} against {scale:e}");
+        let diff_theta = state
+            .theta
+            .iter()
+            .zip(&reference.theta)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(diff_theta <= 1e-10, "step {n}: θ differs by {diff_theta:e}");
+    }
+}
+
+/// The forced failure, on the coarse mesh: exit non-zero, and the folder holds the frames
+/// written so far, the last completed state in the `.pvd`, and a summary that says what failed.
+#[test]
+fn a_run_that_stops_leaves_its_frames_its_last_state_and_a_failed_summary() {
+    let out = scratch("stop");
+    let result = Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+        .args(["run", "--quiet"])
+        .args([
+            "--set",
+            "mesh.nx=16",
+            "--set",
+            "mesh.ny=4",
+            "--set",
+            "time.steps=16",
+            "--set",
+            "solver.max_convexification=5",
+            "--set",
+            "solver.cutback=false",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("time step 6"), "{stderr}");
+    assert!(stderr.contains("> tolerance 1e-6"), "{stderr}");
+
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+    let failure = &summary["failure"];
+    assert_eq!(failure["step"], 6);
+    assert_eq!(failure["last_step"], 5);
+    assert!((failure["last_time"].as_f64().unwrap() - 5.0 / 16.0).abs() < 1e-12);
+    let solver = &failure["solver"];
+    assert_eq!(solver["loop_name"], "convexification");
+    assert!(solver["value"].as_f64().unwrap() > solver["tolerance"].as_f64().unwrap());
+    // The output at t = 0.25 (n = 4) was written before the stop, and n = 5 is the last state.
+    assert_eq!(summary["outputs"].as_array().unwrap().len(), 1);
+    let pvd = std::fs::read_to_string(out.join("solution.pvd")).unwrap();
+    for file in ["solution_0004.vtu", "solution_0005.vtu"] {
+        assert!(pvd.contains(file), "{pvd}");
+        let vtu = std::fs::read_to_string(out.join(file)).unwrap();
+        assert!(vtu.trim_end().ends_with("</VTKFile>"), "{file} is whole");
+    }
+    assert!(out.join("contact_0005.csv").exists());
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn the_cutback_depth_is_bounded_with_a_clear_error() {
+    let error = Scenario::load(None, &["solver.max_cutback_depth=40".into()])
+        .and_then(|s| s.validate())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("solver.max_cutback_depth") && error.contains("40"),
+        "{error}"
+    );
+}
