@@ -1,5 +1,7 @@
 //! The `bench` command: the paper's reference discretization for each solver, and a scaling
-//! table of the fast solver over mesh sizes.
+//! table of the fast solver over mesh sizes; with `--hard`, a suite of difficult cases
+//! ([`hard_cases`]) that reports whether each completed, its cutbacks and the worst nodal-law
+//! residual of the states it returned.
 //!
 //! Every configuration runs in a child process (`thermocontact run` with outputs off), so that
 //! each run's peak memory (VmHWM, read by the child at its end) is its own.
@@ -87,6 +89,168 @@ pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -
         newton_iterations: int(&summary["newton_iterations"]),
         peak_memory_mib: summary["peak_memory_mib"].as_f64(),
     })
+}
+
+/// A difficult configuration: the default scenario (or a scenario file) with overrides.
+#[derive(Debug, Clone)]
+pub struct HardCase {
+    pub name: &'static str,
+    /// Why it is hard.
+    pub what: &'static str,
+    /// A scenario file (relative to the working directory), or `None` for the default.
+    pub scenario: Option<&'static str>,
+    pub overrides: Vec<&'static str>,
+}
+
+/// The hard suite: long runs, a coarse k, steep slip weakening (α up to 1000 s/m, b down to
+/// 0.05), and the 3D example on a finer mesh at a coarse k.
+pub fn hard_cases() -> Vec<HardCase> {
+    let case = |name, what, scenario, overrides: &[&'static str]| HardCase {
+        name,
+        what,
+        scenario,
+        overrides: overrides.to_vec(),
+    };
+    let long = ["time.final_time=3.0", "time.steps=192"];
+    let steep = ["friction.alpha=1000.0", "friction.b=0.05"];
+    vec![
+        case(
+            "long-fast",
+            "default example to T = 3 s (192 steps), fast solver",
+            None,
+            &long,
+        ),
+        case(
+            "long-paper",
+            "the same, the paper's solver",
+            None,
+            &[long[0], long[1], "solver.kind=\"paper\""],
+        ),
+        case("coarse-k", "default example with k = 1/8", None, &["time.steps=8"]),
+        case(
+            "alpha-1000",
+            "slip weakening α = 1000 s/m",
+            None,
+            &["friction.alpha=1000.0"],
+        ),
+        case("steep-fast", "α = 1000 s/m and b = 0.05, fast solver", None, &steep),
+        case(
+            "steep-paper",
+            "α = 1000 s/m and b = 0.05, the paper's solver",
+            None,
+            &[steep[0], steep[1], "solver.kind=\"paper\""],
+        ),
+        case(
+            "3d-56x14x14",
+            "3D example on 56 × 14 × 14 cells (57k unknowns), k = 1/8",
+            Some("scenarios/paper3d.toml"),
+            &["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8"],
+        ),
+    ]
+}
+
+/// How a hard case ended.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct HardRow {
+    pub name: String,
+    pub what: String,
+    /// `completed`, `failed` or `skipped` (the scenario file is missing).
+    pub status: String,
+    pub unknowns: usize,
+    pub steps: usize,
+    /// Steps cut back, and the deepest cutback (substeps of k/2^depth).
+    pub cutback_steps: usize,
+    pub deepest_cutback: usize,
+    /// Largest nodal friction-law residual of the returned states, relative to μ(0)S.
+    pub max_law_residual: Option<f64>,
+    /// Wall time of the child process.
+    pub wall: f64,
+    pub peak_memory_mib: Option<f64>,
+    /// The error of a failed run.
+    pub failure: Option<String>,
+}
+
+/// Runs one hard case in a child process (outputs off) and reads its summary, failed or not.
+pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<HardRow> {
+    let dir = work.join(format!("hard-{}", case.name));
+    let mut row = HardRow {
+        name: case.name.to_string(),
+        what: case.what.to_string(),
+        status: "skipped".into(),
+        unknowns: 0,
+        steps: 0,
+        cutback_steps: 0,
+        deepest_cutback: 0,
+        max_law_residual: None,
+        wall: 0.0,
+        peak_memory_mib: None,
+        failure: None,
+    };
+    let mut command = Command::new(exe);
+    command.args(["run", "--quiet", "--out"]).arg(&dir);
+    if let Some(file) = case.scenario {
+        if !Path::new(file).exists() {
+            row.failure = Some(format!("{file} not found (run from the repository root)"));
+            return Ok(row);
+        }
+        command.arg(file);
+    }
+    for o in &case.overrides {
+        command.args(["--set", o]);
+    }
+    command.args(["--set", "output.vtk=false", "--set", "output.csv=false"]);
+    let clock = std::time::Instant::now();
+    let result = command.stdout(std::process::Stdio::null()).output()?;
+    row.wall = clock.elapsed().as_secs_f64();
+    let summary: serde_json::Value = match std::fs::read(dir.join("summary.json")) {
+        Ok(bytes) => serde_json::from_slice(&bytes)?,
+        Err(_) => {
+            // Stopped before the time loop (an invalid case): no summary to read.
+            row.status = "failed".into();
+            row.failure = Some(String::from_utf8_lossy(&result.stderr).trim().to_string());
+            return Ok(row);
+        }
+    };
+    let int = |v: &serde_json::Value| v.as_u64().unwrap_or(0) as usize;
+    row.status = summary["status"].as_str().unwrap_or("unknown").to_string();
+    row.unknowns = int(&summary["unknowns"]);
+    row.steps = int(&summary["steps"]);
+    let cutbacks = summary["cutbacks"].as_array().cloned().unwrap_or_default();
+    row.cutback_steps = cutbacks.len();
+    row.deepest_cutback = cutbacks.iter().map(|c| int(&c["depth"])).max().unwrap_or(0);
+    row.max_law_residual = summary["max_law_residual"].as_f64();
+    row.peak_memory_mib = summary["peak_memory_mib"].as_f64();
+    row.failure = summary["failure"]["message"].as_str().map(str::to_string);
+    Ok(row)
+}
+
+/// The hard suite's table.
+pub fn format_hard_table(rows: &[HardRow]) -> String {
+    let mut out = format!(
+        "{:<12} {:>9} {:>8} {:>5} {:>9} {:>11} {:>8} {:>8}\n",
+        "case", "status", "unknowns", "steps", "cutbacks", "law resid.", "wall [s]", "mem MiB"
+    );
+    for r in rows {
+        out.push_str(&format!(
+            "{:<12} {:>9} {:>8} {:>5} {:>9} {:>11} {:>8.2} {:>8}\n",
+            r.name,
+            r.status,
+            r.unknowns,
+            r.steps,
+            if r.deepest_cutback == 0 {
+                "0".to_string()
+            } else {
+                format!("{} (k/{})", r.cutback_steps, 1usize << r.deepest_cutback)
+            },
+            r.max_law_residual.map_or("-".to_string(), |v| format!("{v:.1e}")),
+            r.wall,
+            r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
+        ));
+    }
+    for r in rows.iter().filter(|r| r.failure.is_some()) {
+        out.push_str(&format!("{}: {}\n", r.name, r.failure.as_deref().unwrap_or_default()));
+    }
+    out
 }
 
 /// The table header and one line per row.
@@ -212,5 +376,23 @@ mod tests {
         let pts: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0].iter().map(|&x| (x, 3.0 * x * x)).collect();
         assert!((loglog_slope(&pts).unwrap() - 2.0).abs() < 1e-12);
         assert!(loglog_slope(&pts[..1]).is_none());
+    }
+
+    /// Every hard case is a valid scenario (a mistyped key would make the suite measure
+    /// nothing), and the 3D case is the size the issue names.
+    #[test]
+    fn the_hard_cases_are_valid_scenarios() {
+        for case in hard_cases() {
+            let text = case
+                .scenario
+                .map(|f| std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(f)).unwrap());
+            let overrides: Vec<String> = case.overrides.iter().map(|o| o.to_string()).collect();
+            let scenario =
+                crate::Scenario::load(text.as_deref(), &overrides).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+            scenario.validate().unwrap_or_else(|e| panic!("{}: {e}", case.name));
+            if case.name.starts_with("3d") {
+                assert_eq!(scenario.dim(), 3);
+            }
+        }
     }
 }

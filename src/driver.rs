@@ -138,6 +138,10 @@ pub struct Summary {
     pub factor_nnz: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
     pub peak_memory_mib: Option<f64>,
+    /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
+    /// stick, ξ_i = −μ(|w_i|)S w_i/|w_i| at slip) over every completed step and Γ_C node,
+    /// relative to μ(0)S: how well the returned states solve the discrete problem.
+    pub max_law_residual: f64,
     /// Steps cut back into substeps (a step that converged at k is not listed).
     pub cutbacks: Vec<CutbackRecord>,
     /// `completed`, or `failed` with [`Summary::failure`].
@@ -292,6 +296,7 @@ pub fn run_observed(
     let mut outputs = Vec::new();
     let mut pvd = Vec::new();
     let mut cutbacks = Vec::new();
+    let mut max_law_residual: f64 = 0.0;
     let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
     let (mut newton_total, mut fallbacks) = (0, 0);
     let mut output_time = 0.0;
@@ -303,6 +308,7 @@ pub fn run_observed(
         outer_max = outer_max.max(info.convexification_iterations);
         newton_total += info.newton_iterations;
         fallbacks += usize::from(info.fallback);
+        max_law_residual = max_law_residual.max(law_residual(problem, state, plan.slip_tolerance));
         if info.cutback_depth > 0 {
             let cutback = CutbackRecord {
                 step: state.n,
@@ -374,6 +380,7 @@ pub fn run_observed(
         linear_solves: loop_solves,
         factor_nnz: levels.first().system().factor_nnz(),
         peak_memory_mib: crate::bench::peak_memory_mib(),
+        max_law_residual,
         cutbacks,
         status: if failure.is_some() {
             RunStatus::Failed
@@ -422,6 +429,19 @@ pub fn run_observed(
         }
         (None, written) => written.map(|()| Run { summary, state }),
     }
+}
+
+/// The largest nodal friction-law residual of a state on Γ_C, relative to μ(0)S.
+fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> f64 {
+    let law = problem.friction.as_ref();
+    let tangential = problem.dim() - 1;
+    let w_tau = crate::solver::paper::contact_tangential(problem, &state.w);
+    let worst = w_tau
+        .chunks_exact(tangential)
+        .zip(state.xi.chunks_exact(tangential))
+        .map(|(w, xi)| crate::contact::friction::law_residual(law, w, xi, slip_tolerance))
+        .fold(0.0, f64::max);
+    worst / law.bound(0.0).max(f64::MIN_POSITIVE)
 }
 
 /// The figures of one output time.

@@ -88,6 +88,13 @@ enum Command {
         /// Also run the paper's solver in the scaling table up to this nx.
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
+        /// Run the hard suite instead: long runs, a coarse k, steep slip weakening (α = 1000,
+        /// b = 0.05), the 3D example at 57k unknowns and k = 1/8 (several minutes). Prints for
+        /// each case whether it completed, its cutbacks and the worst nodal-law residual, and
+        /// writes bench_hard.json. Run from the repository root (the 3D case reads
+        /// scenarios/paper3d.toml).
+        #[arg(long)]
+        hard: bool,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -205,7 +212,14 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             sizes,
             steps,
             paper_up_to,
-        } => bench(&out, &sizes, steps, paper_up_to),
+            hard,
+        } => {
+            if hard {
+                bench_hard(&out)
+            } else {
+                bench(&out, &sizes, steps, paper_up_to)
+            }
+        }
         Command::Converge {
             scenario,
             levels,
@@ -342,6 +356,25 @@ fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usiz
         "tables written to {}/ (bench.json, bench_fast.csv, bench_paper.csv)",
         out.display()
     );
+    Ok(())
+}
+
+/// `bench --hard`: every hard case in a child process, then the table.
+fn bench_hard(out: &std::path::Path) -> anyhow::Result<()> {
+    use thermocontact::bench::{format_hard_table, hard_cases, run_hard};
+    let exe = std::env::current_exe()?;
+    std::fs::create_dir_all(out)?;
+    let mut rows = Vec::new();
+    for case in hard_cases() {
+        eprintln!("{}: {} …", case.name, case.what);
+        let row = run_hard(&exe, out, &case)?;
+        eprintln!("  {} in {:.1} s", row.status, row.wall);
+        rows.push(row);
+    }
+    println!("\n{}", format_hard_table(&rows));
+    let path = out.join("bench_hard.json");
+    thermocontact::output::write_atomic(&path, &serde_json::to_vec_pretty(&rows)?)?;
+    println!("written to {}", path.display());
     Ok(())
 }
 
