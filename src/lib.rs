@@ -34,6 +34,7 @@
 //! | f₀, f₂, p, g | `BodyForce`, `Traction`, `Pressure`, `HeatSource` | loads ([`problem::LoadTarget`], [`loads::Datum`]) |
 //! | μ(r) S | `bound` | friction bound at slip rate r |
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
+//! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of MODEL.md |
 //!
 //! ## Module map
@@ -42,7 +43,8 @@
 //! [`loads`] (data as constants, affine in t or expressions of x, y, z, t; P1 load vectors),
 //! [`contact`] (per-node frames, laws) → [`problem`] (built by [`problem::ProblemBuilder`] from
 //! typed parts: the discrete problem) → [`solver`] (step system and nonsmooth solvers) →
-//! [`time`] (the one time loop) → [`driver`] (a run: output, progress, timings) → [`output`]
+//! [`time`] (the one time loop, with cutback levels k/2, k/4, … where a step fails) →
+//! [`driver`] (a run: output, progress, timings, a failed run's record) → [`output`]
 //! (files); [`scenario`] translates TOML into the builder's parts (the core never sees it),
 //! [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
 //! regenerates the paper's Section 6 (figures and the study of its open points).
