@@ -524,6 +524,9 @@ fn print_summary(s: &Summary) {
         t.linear_solves
     );
     println!("{:<34} {:>10.3} s", "  right-hand sides", t.right_hand_sides);
+    if t.cutback_setup > 0.0 {
+        println!("{:<34} {:>10.3} s", "  cutback levels set-up", t.cutback_setup);
+    }
     println!("{:<34} {:>10.3} s", "  nonsmooth solver on Γ_C", t.contact_solver);
     println!("{:<34} {:>10.3} s", "output", t.output);
     println!("{:<34} {:>10.3} s", "wall time", t.total);

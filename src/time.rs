@@ -11,7 +11,8 @@
 //! needs them and kept for the rest of the run ([`Levels`]). `cutback = false` keeps the
 //! paper's uniform k.
 
-use std::cell::OnceCell;
+use std::cell::{Cell, OnceCell};
+use std::time::Instant;
 
 use serde::Serialize;
 
@@ -154,6 +155,10 @@ pub struct Levels<'a> {
     problem: &'a Problem,
     params: SolverParams,
     levels: Vec<OnceCell<StepSolver<'a>>>,
+    /// Seconds spent setting up levels 1, 2, … (factorization and condensation).
+    setup_seconds: Cell<f64>,
+    /// The work of all levels' set-up (condensation solves), level 0's included.
+    setup_stats: Cell<SystemStats>,
 }
 
 impl<'a> Levels<'a> {
@@ -161,11 +166,14 @@ impl<'a> Levels<'a> {
     pub fn new(problem: &'a Problem, params: &SolverParams, first: StepSolver<'a>) -> Self {
         let depth = if params.cutback { params.max_cutback_depth } else { 0 };
         let levels: Vec<OnceCell<StepSolver<'a>>> = (0..=depth).map(|_| OnceCell::new()).collect();
+        let setup_stats = Cell::new(first.system().stats());
         let _ = levels[0].set(first);
         Levels {
             problem,
             params: *params,
             levels,
+            setup_seconds: Cell::new(0.0),
+            setup_stats,
         }
     }
 
@@ -186,9 +194,20 @@ impl<'a> Levels<'a> {
         if let Some(solver) = cell.get() {
             return Ok(solver);
         }
+        let clock = Instant::now();
         let k = self.problem.time_step() / (1u64 << depth) as f64;
         let system = StepSystem::with_step(self.problem, k)?;
-        Ok(cell.get_or_init(|| StepSolver::new(self.problem, system, &self.params)))
+        let solver = cell.get_or_init(|| StepSolver::new(self.problem, system, &self.params));
+        self.setup_seconds
+            .set(self.setup_seconds.get() + clock.elapsed().as_secs_f64());
+        self.setup_stats
+            .set(self.setup_stats.get().plus(solver.system().stats()));
+        Ok(solver)
+    }
+
+    /// Seconds spent so far setting up the cutback levels (factorization and condensation).
+    pub fn cutback_setup_seconds(&self) -> f64 {
+        self.setup_seconds.get()
     }
 
     /// The solver of the problem's own step size.
@@ -196,17 +215,15 @@ impl<'a> Levels<'a> {
         self.levels[0].get().expect("level 0 is set at construction")
     }
 
-    /// Work counters summed over the levels made so far.
-    pub fn stats(&self) -> SystemStats {
+    /// Work of the time steps so far, summed over the levels made so far, without their
+    /// set-up (the condensation's block solves).
+    pub fn step_stats(&self) -> SystemStats {
         self.levels
             .iter()
             .filter_map(|cell| cell.get())
             .map(|solver| solver.system().stats())
-            .fold(SystemStats::default(), |a, b| SystemStats {
-                solves: a.solves + b.solves,
-                solve_seconds: a.solve_seconds + b.solve_seconds,
-                rhs_seconds: a.rhs_seconds + b.rhs_seconds,
-            })
+            .fold(SystemStats::default(), SystemStats::plus)
+            .since(self.setup_stats.get())
     }
 
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next

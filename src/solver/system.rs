@@ -65,6 +65,26 @@ pub struct SystemStats {
     pub rhs_seconds: f64,
 }
 
+impl SystemStats {
+    /// The work of both.
+    pub fn plus(self, other: SystemStats) -> SystemStats {
+        SystemStats {
+            solves: self.solves + other.solves,
+            solve_seconds: self.solve_seconds + other.solve_seconds,
+            rhs_seconds: self.rhs_seconds + other.rhs_seconds,
+        }
+    }
+
+    /// The work done since `earlier`.
+    pub fn since(self, earlier: SystemStats) -> SystemStats {
+        SystemStats {
+            solves: self.solves - earlier.solves,
+            solve_seconds: self.solve_seconds - earlier.solve_seconds,
+            rhs_seconds: self.rhs_seconds - earlier.rhs_seconds,
+        }
+    }
+}
+
 /// The factored step matrix and the right-hand side of Problem 14.
 pub struct StepSystem {
     /// S = J A, the symmetric form of the reduced step matrix (rows of the temperature
