@@ -256,7 +256,7 @@ pub fn run_observed(
     timings.factorization = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let levels = Levels::new(problem, params, StepSolver::new(problem, system, params));
+    let levels = Levels::new(problem, params, StepSolver::new(problem, system, params)?);
     timings.solver_setup = clock.elapsed().as_secs_f64();
 
     if let Some(dir) = &options.out_dir {

@@ -76,6 +76,12 @@ pub enum Error {
         cutback_depth: usize,
         failure: crate::solver::StepFailure,
     },
+    /// A linear solve with the factored step matrix gave NaN or ±∞.
+    #[error(
+        "a linear solve with the step matrix gave {non_finite} non-finite values among {unknowns} unknowns \
+         (the step matrix is singular, or the data overflow)"
+    )]
+    NonFiniteSolution { non_finite: usize, unknowns: usize },
     /// Writing an output file failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),

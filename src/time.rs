@@ -110,15 +110,15 @@ pub enum StepSolver<'a> {
 
 impl<'a> StepSolver<'a> {
     /// Sets the chosen solver up on a factored step matrix (the condensation onto Γ_C).
-    pub fn new(problem: &'a Problem, system: StepSystem, params: &SolverParams) -> Self {
+    pub fn new(problem: &'a Problem, system: StepSystem, params: &SolverParams) -> Result<Self, Error> {
         let paper_params = PaperParams {
             tolerance: params.tolerance,
             max_convexification: params.max_convexification,
             inner_tolerance: params.inner_tolerance,
             max_inner: params.max_inner,
         };
-        let paper = PaperSolver::new(problem, system, paper_params);
-        match params.kind {
+        let paper = PaperSolver::new(problem, system, paper_params)?;
+        Ok(match params.kind {
             SolverKind::Paper => StepSolver::Paper(paper),
             SolverKind::Fast => StepSolver::Fast(FastSolver::new(
                 problem,
@@ -129,7 +129,7 @@ impl<'a> StepSolver<'a> {
                     max_iterations: 8,
                 },
             )),
-        }
+        })
     }
 
     /// One step of the solver's step size, from `previous` to time `t`.
@@ -180,7 +180,7 @@ impl<'a> Levels<'a> {
     /// Sets up level 0 (factorization and condensation) and the empty deeper levels.
     pub fn build(problem: &'a Problem, params: &SolverParams) -> Result<Self, Error> {
         let system = StepSystem::new(problem)?;
-        Ok(Levels::new(problem, params, StepSolver::new(problem, system, params)))
+        Ok(Levels::new(problem, params, StepSolver::new(problem, system, params)?))
     }
 
     /// The deepest level a cutback may use.
@@ -197,7 +197,8 @@ impl<'a> Levels<'a> {
         let clock = Instant::now();
         let k = self.problem.time_step() / (1u64 << depth) as f64;
         let system = StepSystem::with_step(self.problem, k)?;
-        let solver = cell.get_or_init(|| StepSolver::new(self.problem, system, &self.params));
+        let solver = StepSolver::new(self.problem, system, &self.params)?;
+        let solver = cell.get_or_init(|| solver);
         self.setup_seconds
             .set(self.setup_seconds.get() + clock.elapsed().as_secs_f64());
         self.setup_stats

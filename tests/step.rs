@@ -23,7 +23,7 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
     let scenario = coarse(&["friction.bound=0.0", "material.thermal_expansion=0.0"]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
     let (state, _) = solver.step(&State::initial(&problem), problem.time_step()).unwrap();
 
     let k = problem.time_step();
@@ -70,13 +70,13 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
 fn condensation_matches_full_solves() {
     let problem = coarse(&[]).build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let cond = Condensation::new(&problem, &system);
+    let cond = Condensation::new(&problem, &system).unwrap();
     let n_c = problem.contact.len();
     let xi: Vec<f64> = (0..n_c).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
     let heat: Vec<f64> = (0..n_c).map(|i| 0.1 * (i % 3) as f64).collect();
     let mut x = vec![0.0; system.n_unknowns()];
     add_contact_terms(&problem, problem.n_w(), &xi, &heat, &mut x);
-    system.solve_in_place(&mut x);
+    system.solve_in_place(&mut x).unwrap();
     let direct = tangential_velocities(&problem, &x);
     let mut w = vec![0.0; cond.n_t];
     cond.velocities(&vec![0.0; cond.n_t], &xi, &heat, &mut w);
@@ -95,7 +95,7 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     let scenario = coarse(&[]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
     let mut state = State::initial(&problem);
     let tol = scenario.solver.slip_tolerance;
     let mut slipped = 0;
@@ -139,7 +139,7 @@ fn non_convergence_names_the_failed_criterion_and_its_value() {
         ]);
         let problem = scenario.build().unwrap();
         let system = StepSystem::new(&problem).unwrap();
-        let solver = StepSolver::new(&problem, system, &scenario.solver_params());
+        let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
         let mut state = State::initial(&problem);
         let failure = loop {
             match solver.step(&state, state.t + problem.time_step()) {
@@ -171,5 +171,25 @@ fn non_convergence_names_the_failed_criterion_and_its_value() {
                 "{failure}"
             );
         }
+    }
+}
+
+/// A linear solve never passes NaN on: a non-finite right-hand side comes back as an error that
+/// counts the bad values.
+#[test]
+fn a_non_finite_solve_is_an_error() {
+    let problem = coarse(&[]).build().unwrap();
+    let system = StepSystem::new(&problem).unwrap();
+    let mut x = system
+        .rhs(&problem, &State::initial(&problem), problem.time_step())
+        .unwrap();
+    system.solve_in_place(&mut x.clone()).unwrap();
+    x[0] = f64::NAN;
+    match system.solve_in_place(&mut x) {
+        Err(thermocontact::Error::NonFiniteSolution { non_finite, unknowns }) => {
+            assert!(non_finite > 0 && non_finite <= unknowns);
+            assert_eq!(unknowns, system.n_unknowns());
+        }
+        other => panic!("{other:?}"),
     }
 }

@@ -187,7 +187,7 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
     .unwrap();
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params());
+    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
     let law = problem.friction.as_ref();
     let tol = scenario.solver.slip_tolerance;
     let mut state = State::initial(&problem);

@@ -16,6 +16,7 @@
 use rayon::prelude::*;
 
 use super::system::StepSystem;
+use crate::error::Error;
 use crate::problem::Problem;
 
 /// The contact compliances C (friction → w_τ) and H (heat → w_τ), dense, row-major.
@@ -37,7 +38,7 @@ impl Condensation {
     ///
     /// A⁻¹ = S⁻¹ J, J = diag(I, −I); with X = S⁻¹ E_wᵀ, symmetry of S gives both blocks:
     /// C = E_w X ℓ and H = −(E_θ X)ᵀ ℓ.
-    pub fn new(problem: &Problem, system: &StepSystem) -> Self {
+    pub fn new(problem: &Problem, system: &StepSystem) -> Result<Self, Error> {
         let tangential = problem.dim() - 1;
         let n_contact = problem.contact.len();
         let n_t = n_contact * tangential;
@@ -63,7 +64,7 @@ impl Condensation {
             let half = width.div_ceil(rayon::current_num_threads().max(1)).max(1);
             block
                 .par_chunks_mut(n * half)
-                .for_each(|part| system.solve_symmetric_block_in_place(part, part.len() / n));
+                .try_for_each(|part| system.solve_symmetric_block_in_place(part, part.len() / n))?;
             for (j, column) in block.chunks_exact(n).enumerate() {
                 let col = start + j;
                 let weight = problem.contact[col / tangential].weight;
@@ -90,12 +91,12 @@ impl Condensation {
                 friction[c * n_t + c] = if mean > 0.0 { mean } else { 1.0 };
             }
         }
-        Condensation {
+        Ok(Condensation {
             n_t,
             n_h: n_contact,
             friction,
             heat,
-        }
+        })
     }
 
     /// w = w_free + C ξ + H h, all node-major flat vectors.

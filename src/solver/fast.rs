@@ -61,7 +61,7 @@ impl<'a> FastSolver<'a> {
         let tangential = problem.dim() - 1;
         let base = system.rhs(problem, previous, t)?;
         let mut x = base.clone();
-        system.solve_in_place(&mut x);
+        system.solve_in_place(&mut x)?;
         let w_free = tangential_velocities(problem, &x);
 
         let step = CondensedStep {
@@ -106,7 +106,7 @@ impl<'a> FastSolver<'a> {
         let xi = result.xi;
         x.copy_from_slice(&base);
         add_contact_terms(problem, problem.n_w(), &xi, &heat, &mut x);
-        system.solve_in_place(&mut x);
+        system.solve_in_place(&mut x)?;
         let state = system.state_from(problem, previous, t, &x, xi);
         Ok((state, info))
     }

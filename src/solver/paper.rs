@@ -20,6 +20,7 @@ use super::condensed::Condensation;
 use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
 use super::{increments_converged, relative_increments, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
+use crate::error::Error;
 use crate::problem::Problem;
 
 /// Settings of the paper's solver.
@@ -47,17 +48,17 @@ pub struct PaperSolver<'a> {
 
 impl<'a> PaperSolver<'a> {
     /// Sets the solver up: condenses onto Γ_C and picks the augmentation parameter.
-    pub fn new(problem: &'a Problem, system: StepSystem, params: PaperParams) -> Self {
-        let condensation = Condensation::new(problem, &system);
+    pub fn new(problem: &'a Problem, system: StepSystem, params: PaperParams) -> Result<Self, Error> {
+        let condensation = Condensation::new(problem, &system)?;
         let lambda_max = condensation.friction_spectral_bound();
         let augmentation = if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 };
-        PaperSolver {
+        Ok(PaperSolver {
             problem,
             system,
             condensation,
             params,
             augmentation,
-        }
+        })
     }
 
     /// The factored step matrix (of step size k).
@@ -79,7 +80,7 @@ impl<'a> PaperSolver<'a> {
         let n_contact = problem.contact.len();
         let base = self.system.rhs(problem, previous, t)?;
         let mut x = base.clone();
-        self.system.solve_in_place(&mut x);
+        self.system.solve_in_place(&mut x)?;
         let w_free = tangential_velocities(problem, &x);
 
         // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
@@ -150,7 +151,7 @@ impl<'a> PaperSolver<'a> {
             self.condensation.velocities(&w_free, &xi, &heat, &mut w);
             x.copy_from_slice(&base);
             add_contact_terms(problem, n_w, &xi, &heat, &mut x);
-            self.system.solve_in_place(&mut x);
+            self.system.solve_in_place(&mut x)?;
             let next = self.system.state_from(problem, previous, t, &x, xi.clone());
             let increments = relative_increments(problem, &current, &next);
             info.convexification_iterations = m + 1;

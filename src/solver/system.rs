@@ -211,8 +211,8 @@ impl StepSystem {
         self.factor.factor_nnz()
     }
 
-    /// Solves A x = b in place (as S x = J b).
-    pub fn solve_in_place(&self, b: &mut [f64]) {
+    /// Solves A x = b in place (as S x = J b); a non-finite result is an error, never passed on.
+    pub fn solve_in_place(&self, b: &mut [f64]) -> Result<(), Error> {
         let clock = Instant::now();
         b[self.n_w..].iter_mut().for_each(|v| *v = -*v);
         self.factor.solve_in_place(b, 1);
@@ -220,17 +220,19 @@ impl StepSystem {
             s.solves += 1;
             s.solve_seconds += clock.elapsed().as_secs_f64();
         });
+        finite(b)
     }
 
     /// Solves the symmetric system S X = B in place for a column-major block of right-hand sides
     /// (S = J A; see [`super::factor`]).
-    pub fn solve_symmetric_block_in_place(&self, block: &mut [f64], n_cols: usize) {
+    pub fn solve_symmetric_block_in_place(&self, block: &mut [f64], n_cols: usize) -> Result<(), Error> {
         let clock = Instant::now();
         self.factor.solve_in_place(block, n_cols);
         self.count(|s| {
             s.solves += n_cols;
             s.solve_seconds += clock.elapsed().as_secs_f64();
         });
+        finite(block)
     }
 
     /// The new state at time t from the solution x of the step from `previous`.
@@ -252,6 +254,17 @@ impl StepSystem {
             theta,
             xi,
         }
+    }
+}
+
+/// `Ok` when every value is finite.
+fn finite(x: &[f64]) -> Result<(), Error> {
+    match x.iter().filter(|v| !v.is_finite()).count() {
+        0 => Ok(()),
+        non_finite => Err(Error::NonFiniteSolution {
+            non_finite,
+            unknowns: x.len(),
+        }),
     }
 }
 
