@@ -142,7 +142,7 @@ pub fn hard_cases() -> Vec<HardCase> {
         ),
         case(
             "3d-56x14x14",
-            "3D example on 56 × 14 × 14 cells (57k unknowns), k = 1/8",
+            "3D example on 56 × 14 × 14 cells (47k unknowns), k = 1/8",
             Some("scenarios/paper3d.toml"),
             &["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8"],
         ),
