@@ -35,6 +35,9 @@ pub struct BenchRow {
     pub convexification_iterations: usize,
     pub inner_iterations: usize,
     pub newton_iterations: usize,
+    /// Steps cut back into substeps.
+    #[serde(default)]
+    pub cutback_steps: usize,
     pub peak_memory_mib: Option<f64>,
 }
 
@@ -87,6 +90,7 @@ pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -
         convexification_iterations: int(&summary["convexification_iterations"]),
         inner_iterations: int(&summary["inner_iterations"]),
         newton_iterations: int(&summary["newton_iterations"]),
+        cutback_steps: summary["cutbacks"].as_array().map_or(0, Vec::len),
         peak_memory_mib: summary["peak_memory_mib"].as_f64(),
     })
 }
@@ -256,7 +260,7 @@ pub fn format_hard_table(rows: &[HardRow]) -> String {
 /// The table header and one line per row.
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut out = format!(
-        "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7} {:>9}\n",
+        "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8} {:>9}\n",
         "solver",
         "nx",
         "nodes",
@@ -271,11 +275,12 @@ pub fn format_table(rows: &[BenchRow]) -> String {
         "total s",
         "outer",
         "newton",
+        "cutbacks",
         "peak MiB"
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8.3} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3} {:>7} {:>7} {:>9}\n",
+            "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8.3} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3} {:>7} {:>7} {:>8} {:>9}\n",
             r.solver,
             r.nx,
             r.nodes,
@@ -290,6 +295,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.total,
             r.convexification_iterations,
             r.newton_iterations,
+            r.cutback_steps,
             r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
         ));
     }
