@@ -8,7 +8,7 @@
 use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{contact_tangential, PaperParams, PaperSolver};
-use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
+use super::system::{State, StepSystem};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::problem::Problem;
 
@@ -59,10 +59,8 @@ impl<'a> FastSolver<'a> {
         let problem = self.problem;
         let system = self.system();
         let tangential = problem.dim() - 1;
-        let base = system.rhs(problem, previous, t)?;
-        let mut x = base.clone();
-        system.solve_in_place(&mut x)?;
-        let w_free = tangential_velocities(problem, &x);
+        let mut free = system.free_step(problem, previous, t)?;
+        let w_free = std::mem::take(&mut free.w_free);
 
         let step = CondensedStep {
             condensation: self.condensation(),
@@ -104,10 +102,7 @@ impl<'a> FastSolver<'a> {
             })
             .collect();
         let xi = result.xi;
-        x.copy_from_slice(&base);
-        add_contact_terms(problem, problem.n_w(), &xi, &heat, &mut x);
-        system.solve_in_place(&mut x)?;
-        let state = system.state_from(problem, previous, t, &x, xi);
+        let state = system.loaded_state(problem, previous, t, &mut free, xi, &heat)?;
         Ok((state, info))
     }
 

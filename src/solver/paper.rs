@@ -17,7 +17,7 @@
 //! one solve for the full fields that (77)–(80) measure.
 
 use super::condensed::Condensation;
-use super::system::{add_contact_terms, tangential_velocities, State, StepSystem};
+use super::system::{State, StepSystem};
 use super::{increments_converged, relative_increments, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
 use crate::error::Error;
@@ -76,12 +76,9 @@ impl<'a> PaperSolver<'a> {
         let problem = self.problem;
         let tangential = problem.dim() - 1;
         let k = self.system.step_size();
-        let n_w = problem.n_w();
         let n_contact = problem.contact.len();
-        let base = self.system.rhs(problem, previous, t)?;
-        let mut x = base.clone();
-        self.system.solve_in_place(&mut x)?;
-        let w_free = tangential_velocities(problem, &x);
+        let mut free = self.system.free_step(problem, previous, t)?;
+        let w_free = std::mem::take(&mut free.w_free);
 
         // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
         let mut current = previous.clone();
@@ -149,10 +146,9 @@ impl<'a> PaperSolver<'a> {
             }
             // The full fields of this iterate: one solve with the converged contact terms.
             self.condensation.velocities(&w_free, &xi, &heat, &mut w);
-            x.copy_from_slice(&base);
-            add_contact_terms(problem, n_w, &xi, &heat, &mut x);
-            self.system.solve_in_place(&mut x)?;
-            let next = self.system.state_from(problem, previous, t, &x, xi.clone());
+            let next = self
+                .system
+                .loaded_state(problem, previous, t, &mut free, xi.clone(), &heat)?;
             let increments = relative_increments(problem, &current, &next);
             info.convexification_iterations = m + 1;
             info.increments = increments;

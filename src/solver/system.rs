@@ -235,6 +235,34 @@ impl StepSystem {
         finite(block)
     }
 
+    /// The first half of every step solver's step: the right-hand side without contact terms
+    /// and the free solve, whose tangential velocities on Γ_C are w_τ^free of the condensed
+    /// problem.
+    pub fn free_step(&self, problem: &Problem, previous: &State, t: f64) -> Result<FreeStep, Error> {
+        let base = self.rhs(problem, previous, t)?;
+        let mut x = base.clone();
+        self.solve_in_place(&mut x)?;
+        let w_free = tangential_velocities(problem, &x);
+        Ok(FreeStep { base, x, w_free })
+    }
+
+    /// The second half: the full fields at time t with the contact terms ξ and h added to the
+    /// free right-hand side (one solve, into `free.x`).
+    pub fn loaded_state(
+        &self,
+        problem: &Problem,
+        previous: &State,
+        t: f64,
+        free: &mut FreeStep,
+        xi: Vec<f64>,
+        heat: &[f64],
+    ) -> Result<State, Error> {
+        free.x.copy_from_slice(&free.base);
+        add_contact_terms(problem, self.n_w, &xi, heat, &mut free.x);
+        self.solve_in_place(&mut free.x)?;
+        Ok(self.state_from(problem, previous, t, &free.x, xi))
+    }
+
     /// The new state at time t from the solution x of the step from `previous`.
     pub fn state_from(&self, problem: &Problem, previous: &State, t: f64, x: &[f64], xi: Vec<f64>) -> State {
         let w = problem.velocity.prolong(&x[..self.n_w]);
@@ -255,6 +283,17 @@ impl StepSystem {
             xi,
         }
     }
+}
+
+/// A step's right-hand side without contact terms and its solution (the free fields).
+pub struct FreeStep {
+    /// The right-hand side without contact terms.
+    pub base: Vec<f64>,
+    /// Work vector: the free solution after [`StepSystem::free_step`], the loaded one after
+    /// [`StepSystem::loaded_state`].
+    pub x: Vec<f64>,
+    /// w_τ^free on Γ_C in the nodes' tangent coordinates.
+    pub w_free: Vec<f64>,
 }
 
 /// `Ok` when every value is finite.
