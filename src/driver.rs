@@ -31,7 +31,8 @@ pub struct RunOptions {
     pub out_dir: Option<PathBuf>,
     /// Draw a progress bar on stderr.
     pub progress: bool,
-    /// Print a line on stderr for every cutback and for a failure (batch logs).
+    /// Print a line on stderr for every cutback (batch logs); the error that stops a run is
+    /// returned to the caller, which reports it.
     pub log: bool,
 }
 
@@ -459,7 +460,7 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
         .fold(0.0, f64::max);
     OutputRecord {
         n: state.n,
-        t: state.n as f64 * problem.time_step(),
+        t: state.t,
         slip_nodes,
         stick_nodes: contact.len() - slip_nodes,
         max_slip_rate: contact.iter().map(ContactRow::slip_rate).fold(0.0, f64::max),
