@@ -135,6 +135,11 @@ pub struct Summary {
     pub newton_iterations: usize,
     /// Steps the fast solver took through the convexification loop (law too steep for Newton).
     pub fallback_steps: usize,
+    /// Steps (or substeps) the fast solver finished by descent on the step's energy (the
+    /// convexification loop failed there).
+    pub descent_steps: usize,
+    /// Descent sweeps over all steps.
+    pub descent_sweeps: usize,
     /// Sparse solves in the time loop.
     pub linear_solves: usize,
     /// Stored entries of the LDLᵀ factor of the step matrix.
@@ -301,6 +306,7 @@ pub fn run_observed(
     let mut max_law_residual: f64 = 0.0;
     let (mut outer_total, mut inner_total, mut outer_max) = (0, 0, 0);
     let (mut newton_total, mut fallbacks) = (0, 0);
+    let (mut descent_steps, mut descent_sweeps) = (0, 0);
     let mut output_time = 0.0;
     let loop_clock = Instant::now();
     let marched = time::march(problem, &levels, |state, info| {
@@ -310,6 +316,8 @@ pub fn run_observed(
         outer_max = outer_max.max(info.convexification_iterations);
         newton_total += info.newton_iterations;
         fallbacks += usize::from(info.fallback);
+        descent_steps += usize::from(info.descent_sweeps > 0);
+        descent_sweeps += info.descent_sweeps;
         max_law_residual = max_law_residual.max(law_residual(problem, state, plan.slip_tolerance));
         if info.cutback_depth > 0 {
             let cutback = CutbackRecord {
@@ -381,6 +389,8 @@ pub fn run_observed(
         max_convexification_per_step: outer_max,
         newton_iterations: newton_total,
         fallback_steps: fallbacks,
+        descent_steps,
+        descent_sweeps,
         linear_solves: loop_solves,
         factor_nnz: levels.first().system().factor_nnz(),
         peak_memory_mib: crate::bench::peak_memory_mib(),

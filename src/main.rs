@@ -500,9 +500,16 @@ fn print_summary(s: &Summary) {
         "{:<34} {:>12}",
         "convexification iterations", s.convexification_iterations
     );
-    println!("{:<34} {:>12}", "inner (augmented-Lagrangian) its", s.inner_iterations);
+    println!("{:<34} {:>12}", "inner iterations (Uzawa / sweeps)", s.inner_iterations);
     println!("{:<34} {:>12}", "semismooth Newton iterations", s.newton_iterations);
     println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
+    if s.descent_steps > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "steps finished by descent (sweeps)",
+            format!("{} ({})", s.descent_steps, s.descent_sweeps)
+        );
+    }
     let deepest = s.cutbacks.iter().map(|c| c.depth).max().unwrap_or(0);
     println!(
         "{:<34} {:>12}",

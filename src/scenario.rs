@@ -405,6 +405,7 @@ pub struct SolverSpec {
     pub max_convexification: usize,
     pub inner_tolerance: f64,
     pub max_inner: usize,
+    pub max_sweeps: usize,
     pub cutback: bool,
     pub max_cutback_depth: usize,
     pub slip_tolerance: f64,
@@ -814,6 +815,7 @@ impl Scenario {
             max_convexification: s.max_convexification,
             inner_tolerance: s.inner_tolerance,
             max_inner: s.max_inner,
+            max_sweeps: s.max_sweeps,
             cutback: s.cutback,
             max_cutback_depth: s.max_cutback_depth,
         }

@@ -128,6 +128,7 @@ impl<'a> StepSolver<'a> {
                     tolerance: params.inner_tolerance,
                     max_iterations: 8,
                 },
+                params.max_sweeps,
             )),
         })
     }

@@ -1,29 +1,53 @@
 //! The fast step solver: condensation onto Γ_C + semismooth Newton on the nonmonotone law
-//! ([`super::newton`]), with the convexification loop of Problem 17 (Newton inner solves) as
-//! the safeguard where the law is too steep.
+//! ([`super::newton`]), with the convexification loop of Problem 17 (Newton inner solves) where
+//! the law is too steep, and the descent of [`super::descent`] where both fail.
 //!
 //! Per step: one solve for the free fields, a few dense Newton iterations on Γ_C, one solve
 //! for the full fields — against one solve per convexification iterate for the paper's solver.
+//!
+//! The order of the three methods decides which solution a step with several gets: Newton from
+//! the previous step's state where the nodal problems are monotone (steepness below 1, then the
+//! solution is unique); otherwise the fixed point of the convexification loop started from the
+//! previous step, as the paper's solver (so the two solvers agree wherever the paper's
+//! converges); where that loop cycles or stalls, a stationary point of the step's energy
+//! reached downhill from the previous step's velocities. Only when the descent too misses the
+//! tolerance within its sweeps does the step fail (and the time loop cut it back).
+
+use std::cell::OnceCell;
 
 use super::condensed::Condensation;
+use super::descent::{descend, ContactStiffness, DescentParams};
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{contact_tangential, PaperParams, PaperSolver};
 use super::system::{State, StepSystem};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use crate::error::Error;
 use crate::problem::Problem;
 
-/// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`].
+/// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`]'s loop and to
+/// the descent.
 pub struct FastSolver<'a> {
     problem: &'a Problem,
     paper: PaperSolver<'a>,
     paper_params: PaperParams,
     params: NewtonParams,
+    /// Cap on the descent's sweeps (0: no descent).
+    max_sweeps: usize,
+    /// K = D⁻¹ on Γ_C, inverted when a step first needs the descent.
+    stiffness: OnceCell<ContactStiffness>,
     steepness: f64,
 }
 
 impl<'a> FastSolver<'a> {
-    /// Sets the solver up (the condensation is shared with the fallback solver).
-    pub fn new(problem: &'a Problem, paper: PaperSolver<'a>, paper_params: PaperParams, params: NewtonParams) -> Self {
+    /// Sets the solver up (the condensation is shared with the fallback solver); `max_sweeps`
+    /// caps the descent's sweeps (0 switches it off).
+    pub fn new(
+        problem: &'a Problem,
+        paper: PaperSolver<'a>,
+        paper_params: PaperParams,
+        params: NewtonParams,
+        max_sweeps: usize,
+    ) -> Self {
         let condensation = paper.condensation();
         let n_t = condensation.n_t;
         let max_compliance = (0..n_t).map(|i| condensation.friction[i * n_t + i]).fold(0.0, f64::max);
@@ -33,6 +57,8 @@ impl<'a> FastSolver<'a> {
             paper,
             paper_params,
             params,
+            max_sweeps,
+            stiffness: OnceCell::new(),
             steepness,
         }
     }
@@ -90,8 +116,13 @@ impl<'a> FastSolver<'a> {
                 if self.steepness < 1.0 {
                     info.newton_iterations = self.params.max_iterations;
                 }
-                self.convexified(&step, &w_free, guess_w, guess_xi, &mut info)
-                    .map_err(SolveError::NotConverged)?
+                match self.convexified(&step, &w_free, guess_w.clone(), guess_xi, &mut info) {
+                    Ok(result) => result,
+                    Err(SolveError::NotConverged(_)) if self.max_sweeps > 0 => {
+                        self.descent(&step, &w_free, guess_w, &mut info)?
+                    }
+                    Err(error) => return Err(error),
+                }
             }
         };
         let heat: Vec<f64> = (0..problem.contact.len())
@@ -106,6 +137,85 @@ impl<'a> FastSolver<'a> {
         Ok((state, info))
     }
 
+    /// K = D⁻¹ on Γ_C for the descent, inverted on first use.
+    fn stiffness(&self, tangential: usize) -> Result<&ContactStiffness, Error> {
+        if let Some(stiffness) = self.stiffness.get() {
+            return Ok(stiffness);
+        }
+        let condensation = self.condensation();
+        let weights: Vec<f64> = self.problem.contact.iter().map(|node| node.weight).collect();
+        let stiffness = ContactStiffness::new(&condensation.friction, condensation.n_t, tangential, &weights)?;
+        Ok(self.stiffness.get_or_init(|| stiffness))
+    }
+
+    /// The convex subproblem of a convexification iterate (bounds frozen at `bounds`): in 2D
+    /// semismooth Newton, whose n_t × n_t LU is shared by the iterates with the same stick set
+    /// and slip signs; in 3D the descent, which needs no factorization (Newton's LU changes with
+    /// every slip direction there, ≈ 0.1 s each at 880 tangential unknowns).
+    fn convex_subproblem(
+        &self,
+        step: &CondensedStep,
+        w_free: &[f64],
+        w: &[f64],
+        xi: &[f64],
+        bounds: &[f64],
+        info: &mut StepInfo,
+    ) -> Result<Option<NewtonResult>, Error> {
+        if step.tangential == 1 || self.max_sweeps == 0 {
+            let result = step.solve(w_free, w.to_vec(), xi.to_vec(), Some(bounds), self.params);
+            info.newton_iterations += result.as_ref().map_or(self.params.max_iterations, |r| r.iterations);
+            return Ok(result);
+        }
+        let params = DescentParams {
+            tolerance: self.params.tolerance,
+            max_sweeps: self.max_sweeps,
+            handover: 0.0,
+            newton: self.params,
+        };
+        let stiffness = self.stiffness(step.tangential)?;
+        let result = descend(step, stiffness, w_free, w.to_vec(), Some(bounds), &params, &mut 0);
+        info.inner_iterations += result.as_ref().map_or(self.max_sweeps, |r| r.iterations);
+        Ok(result.ok())
+    }
+
+    /// The descent on the step's energy from the previous step's velocities `w`
+    /// ([`super::descent`]).
+    fn descent(
+        &self,
+        step: &CondensedStep,
+        w_free: &[f64],
+        w: Vec<f64>,
+        info: &mut StepInfo,
+    ) -> Result<NewtonResult, SolveError> {
+        let stiffness = self.stiffness(step.tangential)?;
+        let params = DescentParams {
+            tolerance: self.paper_params.tolerance,
+            max_sweeps: self.max_sweeps,
+            handover: 1e-2,
+            newton: self.params,
+        };
+        let mut newton_iterations = 0;
+        let outcome = descend(step, stiffness, w_free, w, None, &params, &mut newton_iterations);
+        info.newton_iterations += newton_iterations;
+        match outcome {
+            Ok(result) => {
+                info.descent_sweeps = result.iterations;
+                Ok(result)
+            }
+            Err(stall) => {
+                info.descent_sweeps = stall.sweeps;
+                Err(SolveError::NotConverged(StepFailure {
+                    solver: "fast",
+                    loop_name: "descent",
+                    iterations: stall.sweeps,
+                    criterion: Criterion::NodalLaw,
+                    value: stall.law_residual,
+                    tolerance: self.paper_params.tolerance,
+                }))
+            }
+        }
+    }
+
     /// The convexification loop of Problem 17 on the condensed problem, each convex problem
     /// solved by semismooth Newton; stops when w and ξ on Γ_C change by less than ε_conv
     /// (relative to their largest values) and the nonmonotone law holds at every node.
@@ -116,7 +226,7 @@ impl<'a> FastSolver<'a> {
         mut w: Vec<f64>,
         mut xi: Vec<f64>,
         info: &mut StepInfo,
-    ) -> Result<NewtonResult, StepFailure> {
+    ) -> Result<NewtonResult, SolveError> {
         let t = step.tangential;
         let n_nodes = self.problem.contact.len();
         let tolerance = self.paper_params.tolerance;
@@ -126,19 +236,25 @@ impl<'a> FastSolver<'a> {
                 .map(|i| self.problem.friction.bound(norm(&w[i * t..(i + 1) * t])))
                 .collect();
             let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
-            let Some(inner) = step.solve(w_free, w.clone(), xi.clone(), Some(&bounds), self.params) else {
+            let Some(inner) = self
+                .convex_subproblem(step, w_free, &w, &xi, &bounds, info)
+                .map_err(SolveError::Other)?
+            else {
                 // The convex subproblem's Newton stalled: report how far the current iterate is
                 // from solving the step (the nonmonotone law at the nodes).
-                return Err(StepFailure {
+                return Err(SolveError::NotConverged(StepFailure {
                     solver: "fast",
-                    loop_name: "semismooth Newton (convex subproblem)",
+                    loop_name: if t == 1 {
+                        "semismooth Newton (convex subproblem)"
+                    } else {
+                        "descent (convex subproblem)"
+                    },
                     iterations: self.params.max_iterations,
                     criterion: Criterion::NodalLaw,
-                    value: step.residuals(w_free, &w, &xi, None).1 / g_min.max(f64::MIN_POSITIVE),
+                    value: step.law_residual(&w, &xi, None) / g_min.max(f64::MIN_POSITIVE),
                     tolerance,
-                });
+                }));
             };
-            info.newton_iterations += inner.iterations;
             info.convexification_iterations = m;
             let dw = max_diff(&inner.w, &w);
             let dxi = max_diff(&inner.xi, &xi);
@@ -148,7 +264,7 @@ impl<'a> FastSolver<'a> {
             xi = inner.xi;
             // The frozen bounds lag one iterate behind; also require the nonmonotone law itself
             // to hold to the tolerance at every node (relative to the smallest bound).
-            let law = step.residuals(w_free, &w, &xi, None).1;
+            let law = step.law_residual(&w, &xi, None);
             checks = vec![
                 (Criterion::IncrementW, dw / w_scale.max(f64::MIN_POSITIVE), tolerance),
                 (
@@ -167,14 +283,14 @@ impl<'a> FastSolver<'a> {
             }
         }
         let (criterion, value, tolerance) = worst_criterion(&checks);
-        Err(StepFailure {
+        Err(SolveError::NotConverged(StepFailure {
             solver: "fast",
             loop_name: "convexification",
             iterations: self.paper_params.max_convexification,
             criterion,
             value,
             tolerance,
-        })
+        }))
     }
 }
 

@@ -2,9 +2,11 @@
 //!
 //! [`system::StepSystem`] holds the linear part of Problem 14, factored once per run;
 //! [`paper::PaperSolver`] is the convexification + augmented-Lagrangian solver of Problem 17;
-//! [`fast::FastSolver`] a semismooth Newton method on the same condensed problem.
+//! [`fast::FastSolver`] a semismooth Newton method on the same condensed problem, globalized by
+//! the descent of [`descent`] where Newton and the convexification loop both fail.
 
 pub mod condensed;
+pub mod descent;
 pub mod factor;
 pub mod fast;
 pub mod newton;
@@ -25,7 +27,7 @@ pub enum SolverKind {
     /// Convexification loop + Uzawa augmented Lagrangian (Problem 17).
     Paper,
     /// Semismooth Newton on the condensed nonmonotone law, the convexification loop where the
-    /// law is too steep.
+    /// law is too steep, and a descent on the step's energy where both fail.
     Fast,
 }
 
@@ -52,6 +54,8 @@ pub struct SolverParams {
     pub inner_tolerance: f64,
     /// Cap on inner Uzawa iterations per convex problem.
     pub max_inner: usize,
+    /// Cap on sweeps of the fast solver's descent ([`descent`]); 0 switches it off.
+    pub max_sweeps: usize,
     /// Retry a step that fails as 2, 4, … substeps of k/2, k/4, … ([`crate::time::march`]).
     pub cutback: bool,
     /// The deepest cutback: at most 2^depth substeps of k/2^depth.
@@ -66,6 +70,7 @@ impl Default for SolverParams {
             max_convexification: 200,
             inner_tolerance: 1e-10,
             max_inner: 20_000,
+            max_sweeps: 20_000,
             cutback: true,
             max_cutback_depth: 5,
         }
@@ -77,7 +82,8 @@ impl Default for SolverParams {
 pub struct StepInfo {
     /// Outer (convexification) iterations.
     pub convexification_iterations: usize,
-    /// Inner iterations summed over the outer ones (one linear solve each).
+    /// Inner iterations summed over the outer ones: the paper's Uzawa iterations, or the
+    /// descent sweeps of the fast solver's convex subproblems in 3D.
     pub inner_iterations: usize,
     /// Last relative increments of u, θ, ξ, ζ: the left sides of (77)–(80) over the right
     /// sides' norms.
@@ -86,6 +92,9 @@ pub struct StepInfo {
     pub newton_iterations: usize,
     /// The fast solver went through the convexification loop in this step.
     pub fallback: bool,
+    /// Sweeps of the fast solver's descent (0 where Newton or the convexification loop solved
+    /// the step).
+    pub descent_sweeps: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -100,6 +109,7 @@ impl StepInfo {
         self.newton_iterations += other.newton_iterations;
         self.increments = other.increments;
         self.fallback |= other.fallback;
+        self.descent_sweeps += other.descent_sweeps;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
     }

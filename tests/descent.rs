@@ -1,0 +1,203 @@
+//! The fast solver's globalization: descent on the energy of the condensed step
+//! (`solver::descent`). It must return solutions of the step (the condensed equations and the
+//! nodal law) from any start, agree with Newton where the solution is unique, and finish the
+//! steps the convexification loop cannot.
+
+use thermocontact::contact::friction::law_residual;
+use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
+use thermocontact::norms;
+use thermocontact::problem::Problem;
+use thermocontact::solver::descent::{descend, ContactStiffness, DescentParams};
+use thermocontact::solver::newton::{CondensedStep, NewtonParams};
+use thermocontact::solver::paper::{PaperParams, PaperSolver};
+use thermocontact::solver::system::{State, StepSystem};
+use thermocontact::time::contact_rows;
+use thermocontact::Scenario;
+
+fn coarse(overrides: &[&str]) -> Scenario {
+    let mut all = vec![
+        "mesh.nx=16".to_string(),
+        "mesh.ny=4".to_string(),
+        "time.steps=16".to_string(),
+    ];
+    all.extend(overrides.iter().map(|s| s.to_string()));
+    Scenario::load(None, &all).unwrap()
+}
+
+const NEWTON: NewtonParams = NewtonParams {
+    tolerance: 1e-12,
+    max_iterations: 30,
+};
+
+/// The condensed problem of step 6 of the coarse example (after five steps of the fast solver),
+/// handed to `check` with w_τ^free and the previous step's tangential velocities.
+fn with_step_six(scenario: &Scenario, check: impl FnOnce(&CondensedStep, &ContactStiffness, &[f64], &[f64])) {
+    let problem = scenario.build().unwrap();
+    let params = scenario.solver_params();
+    let mut states = Vec::new();
+    thermocontact::time::run(&problem, &params, |state, _| {
+        states.push(state.clone());
+        Ok(())
+    })
+    .unwrap();
+    let previous: &State = &states[4];
+    assert_eq!(previous.n, 5);
+    let t = 6.0 * problem.time_step();
+    let system = StepSystem::new(&problem).unwrap();
+    let paper = PaperSolver::new(&problem, StepSystem::new(&problem).unwrap(), paper_params()).unwrap();
+    let free = system.free_step(&problem, previous, t).unwrap();
+    let step = condensed(&problem, &paper, t);
+    let stiffness = stiffness(&problem, &paper);
+    let w_previous = thermocontact::solver::paper::contact_tangential(&problem, &previous.w);
+    check(&step, &stiffness, &free.w_free, &w_previous);
+}
+
+fn paper_params() -> PaperParams {
+    PaperParams {
+        tolerance: 1e-6,
+        max_convexification: 200,
+        inner_tolerance: 1e-10,
+        max_inner: 20_000,
+    }
+}
+
+fn condensed<'a>(problem: &'a Problem, paper: &'a PaperSolver, t: f64) -> CondensedStep<'a> {
+    CondensedStep {
+        condensation: paper.condensation(),
+        friction: problem.friction.as_ref(),
+        heat_rate: problem.heating.heat(t, 1.0),
+        tangential: problem.dim() - 1,
+        augmentation: paper.augmentation,
+        lu_cache: Default::default(),
+    }
+}
+
+fn stiffness(problem: &Problem, paper: &PaperSolver) -> ContactStiffness {
+    let c = paper.condensation();
+    let weights: Vec<f64> = problem.contact.iter().map(|node| node.weight).collect();
+    ContactStiffness::new(&c.friction, c.n_t, problem.dim() - 1, &weights).unwrap()
+}
+
+/// Descent alone (no hand-over to Newton) to `tolerance`.
+fn descent_only(tolerance: f64) -> DescentParams {
+    DescentParams {
+        tolerance,
+        max_sweeps: 200_000,
+        handover: 0.0,
+        newton: NEWTON,
+    }
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
+/// With Tresca friction the energy is convex and the step has one solution: the descent, from
+/// rest, must reach the one semismooth Newton finds. This checks K = D⁻¹, the weights and the
+/// heat coupling of the energy against an independent method.
+#[test]
+fn with_a_convex_law_the_descent_finds_newtons_solution() {
+    let scenario = coarse(&["friction={law=\"tresca\", bound=40.0}"]);
+    with_step_six(&scenario, |step, stiffness, w_free, w_previous| {
+        let newton = step
+            .solve(w_free, w_previous.to_vec(), vec![0.0; w_free.len()], None, NEWTON)
+            .expect("Newton converges on a convex problem");
+        let mut newton_iterations = 0;
+        let descent = descend(
+            step,
+            stiffness,
+            w_free,
+            vec![0.0; w_free.len()],
+            None,
+            &descent_only(1e-10),
+            &mut newton_iterations,
+        )
+        .unwrap();
+        assert_eq!(newton_iterations, 0);
+        let w_scale = max_abs(&newton.w);
+        assert!(w_scale > 1e-3, "some nodes slip: max |w_τ| = {w_scale:e}");
+        let sticking = newton.w.iter().filter(|w| **w == 0.0).count();
+        assert!(sticking > 0, "some nodes stick");
+        assert!(max_diff(&descent.w, &newton.w) <= 1e-8 * w_scale);
+        assert!(max_diff(&descent.xi, &newton.xi) <= 1e-8 * 40.0);
+        // The same stick set, exactly: the descent puts stick nodes at w = 0.
+        for (d, n) in descent.w.iter().zip(&newton.w) {
+            assert_eq!(*d == 0.0, *n == 0.0);
+        }
+    });
+}
+
+/// A steep law (α = 1000 s/m, b = 0.05): from rest, from the previous step, from w_τ^free and
+/// from twice that, the descent returns states that satisfy the condensed step and the nodal
+/// law; they may be different solutions.
+#[test]
+fn with_a_steep_law_the_descent_reaches_a_solution_from_any_start() {
+    let scenario = coarse(&["friction.alpha=1000", "friction.b=0.05"]);
+    with_step_six(&scenario, |step, stiffness, w_free, w_previous| {
+        let starts = [
+            vec![0.0; w_free.len()],
+            w_previous.to_vec(),
+            w_free.to_vec(),
+            w_free.iter().map(|w| 2.0 * w).collect(),
+        ];
+        for start in starts {
+            let mut newton_iterations = 0;
+            let result = descend(
+                step,
+                stiffness,
+                w_free,
+                start,
+                None,
+                &descent_only(1e-9),
+                &mut newton_iterations,
+            )
+            .unwrap();
+            let (e1, e2) = step.residuals(w_free, &result.w, &result.xi, None);
+            let g_min = (0..result.w.len())
+                .map(|i| step.friction.bound(result.w[i].abs()))
+                .fold(f64::INFINITY, f64::min);
+            let w_scale = max_abs(&result.w).max(max_abs(w_free));
+            assert!(e1 <= 1e-9 * w_scale, "condensed equations: {e1:e} against {w_scale:e}");
+            assert!(e2 <= 1e-9 * g_min, "nodal law: {e2:e}");
+            assert!(result.iterations >= 1);
+        }
+    });
+}
+
+/// Five convexification iterations are not enough at step 6 of the coarse example: with the
+/// descent the run completes without cutback, every step satisfies the law, and the fields are
+/// those of the run whose convexification loop has room to converge (the same solution).
+#[test]
+fn the_descent_finishes_the_steps_the_convexification_loop_cannot() {
+    let starved = coarse(&["solver.max_convexification=5", "solver.cutback=false"]);
+    let problem = starved.build().unwrap();
+    let params = starved.solver_params();
+    let law = problem.friction.as_ref();
+    let slip_tolerance = starved.solver.slip_tolerance;
+    let mut worst: f64 = 0.0;
+    let run = driver::run_observed(
+        &problem,
+        &params,
+        &OutputPlan::default(),
+        &RunOptions::default(),
+        |problem, state, _| {
+            for row in contact_rows(problem, state, slip_tolerance) {
+                worst = worst.max(law_residual(law, &row.w_tau, &row.xi, slip_tolerance) / law.bound(0.0));
+            }
+        },
+    )
+    .unwrap();
+    assert_eq!(run.summary.status, RunStatus::Completed);
+    assert!(run.summary.descent_steps >= 1, "{}", run.summary.descent_steps);
+    assert!(worst <= 1e-6, "nodal law residual {worst:e} (relative to μ(0)S)");
+
+    let (_, reference) = coarse(&[]).run_quiet().unwrap();
+    let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+    let m = &problem.matrices;
+    let du = norms::energy(m, &diff(&run.state.u, &reference.u)) / norms::energy(m, &reference.u);
+    assert!(du < 1e-5, "displacements differ from the unstarved run: {du:e}");
+}
