@@ -125,6 +125,12 @@ pub fn hard_cases() -> Vec<HardCase> {
             &long,
         ),
         case(
+            "long-no-cut",
+            "the same without cutback: the descent must solve every step at k",
+            None,
+            &[long[0], long[1], "solver.cutback=false"],
+        ),
+        case(
             "long-paper",
             "the same, the paper's solver",
             None,
@@ -165,6 +171,8 @@ pub struct HardRow {
     /// Steps cut back, and the deepest cutback (substeps of k/2^depth).
     pub cutback_steps: usize,
     pub deepest_cutback: usize,
+    /// Steps the fast solver finished by descent (the convexification loop failed there).
+    pub descent_steps: usize,
     /// Largest nodal friction-law residual of the returned states, relative to μ(0)S.
     pub max_law_residual: Option<f64>,
     /// Wall time of the child process.
@@ -185,6 +193,7 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
         steps: 0,
         cutback_steps: 0,
         deepest_cutback: 0,
+        descent_steps: 0,
         max_law_residual: None,
         wall: 0.0,
         peak_memory_mib: None,
@@ -222,6 +231,7 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
     let cutbacks = summary["cutbacks"].as_array().cloned().unwrap_or_default();
     row.cutback_steps = cutbacks.len();
     row.deepest_cutback = cutbacks.iter().map(|c| int(&c["depth"])).max().unwrap_or(0);
+    row.descent_steps = int(&summary["descent_steps"]);
     row.max_law_residual = summary["max_law_residual"].as_f64();
     row.peak_memory_mib = summary["peak_memory_mib"].as_f64();
     row.failure = summary["failure"]["message"].as_str().map(str::to_string);
@@ -231,12 +241,12 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
 /// The hard suite's table.
 pub fn format_hard_table(rows: &[HardRow]) -> String {
     let mut out = format!(
-        "{:<12} {:>9} {:>8} {:>5} {:>9} {:>11} {:>8} {:>8}\n",
-        "case", "status", "unknowns", "steps", "cutbacks", "law resid.", "wall [s]", "mem MiB"
+        "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>11} {:>8} {:>8}\n",
+        "case", "status", "unknowns", "steps", "cutbacks", "descent", "law resid.", "wall [s]", "mem MiB"
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<12} {:>9} {:>8} {:>5} {:>9} {:>11} {:>8.2} {:>8}\n",
+            "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>11} {:>8.2} {:>8}\n",
             r.name,
             r.status,
             r.unknowns,
@@ -246,6 +256,7 @@ pub fn format_hard_table(rows: &[HardRow]) -> String {
             } else {
                 format!("{} (k/{})", r.cutback_steps, 1usize << r.deepest_cutback)
             },
+            r.descent_steps,
             r.max_law_residual.map_or("-".to_string(), |v| format!("{v:.1e}")),
             r.wall,
             r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
