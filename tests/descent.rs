@@ -75,7 +75,7 @@ fn condensed<'a>(problem: &'a Problem, paper: &'a PaperSolver, t: f64) -> Conden
 fn stiffness(problem: &Problem, paper: &PaperSolver) -> ContactStiffness {
     let c = paper.condensation();
     let weights: Vec<f64> = problem.contact.iter().map(|node| node.weight).collect();
-    ContactStiffness::new(&c.friction, c.n_t, problem.dim() - 1, &weights).unwrap()
+    ContactStiffness::new(c, problem.dim() - 1, &weights).unwrap()
 }
 
 /// Descent alone (no hand-over to Newton) to `tolerance`.

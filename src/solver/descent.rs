@@ -51,6 +51,7 @@
 use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, Side};
 
+use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use crate::contact::FrictionLaw;
 use crate::error::Error;
@@ -82,11 +83,16 @@ pub struct ContactStiffness {
     weights: Vec<f64>,
     /// κ_i = λ_max(K_ii) per contact node.
     kappa: Vec<f64>,
+    /// (K H)ᵀ, n_h × n_t, row-major: row i is how the gradient moves per unit heat at node i,
+    /// so that a sweep updates the heat node by node without a product with H.
+    kh: Vec<f64>,
 }
 
 impl ContactStiffness {
-    /// K from the compliance C = D ℓ of the condensation (columns scaled by the nodes' ℓ).
-    pub fn new(friction: &[f64], n_t: usize, tangential: usize, weights: &[f64]) -> Result<Self, Error> {
+    /// K from the compliances C = D ℓ (columns scaled by the nodes' ℓ) and H of the
+    /// condensation.
+    pub fn new(condensation: &Condensation, tangential: usize, weights: &[f64]) -> Result<Self, Error> {
+        let (friction, n_t, n_h) = (&condensation.friction, condensation.n_t, condensation.n_h);
         let d = Mat::<f64>::from_fn(n_t, n_t, |r, c| {
             // Symmetrize away the round-off of the column solves.
             0.5 * (friction[r * n_t + c] / weights[c / tangential] + friction[c * n_t + r] / weights[r / tangential])
@@ -112,12 +118,19 @@ impl ContactStiffness {
                 }
             })
             .collect();
+        let h = Mat::<f64>::from_fn(n_t, n_h, |r, c| condensation.heat[r * n_h + c]);
+        let kh_mat = &inverse * &h;
+        let kh = (0..n_h)
+            .flat_map(|i| (0..n_t).map(move |r| (i, r)))
+            .map(|(i, r)| kh_mat[(r, i)])
+            .collect();
         Ok(ContactStiffness {
             n_t,
             tangential,
             k,
             weights: weights.to_vec(),
             kappa,
+            kh,
         })
     }
 
@@ -190,10 +203,11 @@ pub fn descend(
             }
             let r = norm(&v[..t]);
             let ell = stiffness.weights[i];
+            let speed = norm(&w[range.clone()]);
             let s = match frozen {
                 // Tresca: the shrinkage argmin ½κ(s − r)² + ℓ g s.
                 Some(g) => (r - ell * g[i] / kappa).max(0.0),
-                None => radial_minimizer(law, kappa, ell, r, norm(&w[range.clone()])),
+                None => radial_minimizer(law, kappa, ell, r, speed),
             };
             let scale = if r > 0.0 { s / r } else { 0.0 };
             for (k, j) in range.clone().enumerate() {
@@ -205,13 +219,26 @@ pub fn descend(
                     w[j] += delta;
                 }
             }
+            // The node's frictional heat moves w₀ by H Δh_i, the gradient by −(K H)_i Δh_i.
+            let heat_change = step.heat_rate * (norm(&w[range]) - speed);
+            if heat_change != 0.0 {
+                let row = &stiffness.kh[i * n_t..(i + 1) * n_t];
+                y.iter_mut().zip(row).for_each(|(yr, kr)| *yr -= kr * heat_change);
+            }
         }
-        // The heat of the new w, and ξ = ℓ⁻¹ K (w − w₀): (E1) then holds up to round-off, the
-        // law measures stationarity. The gradient carries over to the next sweep.
-        frozen_start(step, w_free, &w, &mut w0);
-        stiffness.gradient(&w, &w0, &mut y);
-        for (j, x) in xi.iter_mut().enumerate() {
-            *x = y[j] / stiffness.weights[j / t];
+        // ξ = ℓ⁻¹ K (w − w₀): (E1) then holds up to round-off, the law measures stationarity.
+        let xi_of = |y: &[f64], xi: &mut [f64]| {
+            for (j, x) in xi.iter_mut().enumerate() {
+                *x = y[j] / stiffness.weights[j / t];
+            }
+        };
+        xi_of(&y, &mut xi);
+        if step.law_residual(&w, &xi, frozen) / g_min(&w) <= params.tolerance {
+            // Converged on the updated gradient: confirm on a fresh one (no drift of the
+            // updates), and carry it on if not.
+            frozen_start(step, w_free, &w, &mut w0);
+            stiffness.gradient(&w, &w0, &mut y);
+            xi_of(&y, &mut xi);
         }
         let previous = residual;
         residual = step.law_residual(&w, &xi, frozen) / g_min(&w);
