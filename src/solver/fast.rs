@@ -148,11 +148,13 @@ impl<'a> FastSolver<'a> {
         Ok(self.stiffness.get_or_init(|| stiffness))
     }
 
-    /// The convex subproblem of a convexification iterate (bounds frozen at `bounds`): in 2D
-    /// semismooth Newton, whose n_t × n_t LU is shared by the iterates with the same stick set
-    /// and slip signs; in 3D the descent, which needs no factorization (Newton's LU changes with
-    /// every slip direction there, ≈ 0.1 s each at 880 tangential unknowns), to `tolerance`
-    /// (Newton keeps its own). Starts from the iterate `(w, ξ)`.
+    /// The convex subproblem of a convexification iterate (bounds frozen at `bounds`), solved
+    /// by the descent to `tolerance` from the iterate `(w, ξ)`: no factorization, a few sweeps
+    /// of O(n_t²) each. Semismooth Newton (one dense n_t × n_t LU per iteration, ≈ 0.1 s each at
+    /// 880 tangential unknowns in 3D, where its matrix changes with every slip direction) does
+    /// it only where the descent is switched off (`max_sweeps` = 0). Measured on the 2D
+    /// reference run: 0.54 s on Γ_C with Newton, 0.22 s with the descent; 3D example: 32 s and
+    /// 6.6 s.
     fn convex_subproblem(
         &self,
         step: &CondensedStep,
@@ -162,7 +164,7 @@ impl<'a> FastSolver<'a> {
         tolerance: f64,
         info: &mut StepInfo,
     ) -> Result<Option<NewtonResult>, Error> {
-        if step.tangential == 1 || self.max_sweeps == 0 {
+        if self.max_sweeps == 0 {
             let result = step.solve(w_free, w.to_vec(), xi.to_vec(), Some(bounds), self.params);
             info.newton_iterations += result.as_ref().map_or(self.params.max_iterations, |r| r.iterations);
             return Ok(result);

@@ -18,8 +18,9 @@
 //!
 //! Where the law falls steeply (m_τ large against ρ/k and the viscosity, conditions (16)–(18))
 //! the step problem may have several solutions and Newton may cycle; the step then goes through
-//! the convexification loop of Problem 17, each convex problem solved by this Newton method with
-//! frozen bounds ([`super::fast`]), and the step is counted.
+//! the convexification loop of Problem 17 ([`super::fast`]), each convex problem solved by the
+//! sweeps of [`super::descent`] (by this Newton method with frozen bounds where the descent is
+//! switched off), and the step is counted.
 
 use std::cell::RefCell;
 
