@@ -7,7 +7,7 @@ use thermocontact::contact::friction::law_residual;
 use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
 use thermocontact::norms;
 use thermocontact::problem::Problem;
-use thermocontact::solver::descent::{descend, ContactStiffness, DescentParams};
+use thermocontact::solver::descent::{descend, ContactStiffness, DescentParams, Start};
 use thermocontact::solver::newton::{CondensedStep, NewtonParams};
 use thermocontact::solver::paper::{PaperParams, PaperSolver};
 use thermocontact::solver::system::{State, StepSystem};
@@ -111,7 +111,7 @@ fn with_a_convex_law_the_descent_finds_newtons_solution() {
             step,
             stiffness,
             w_free,
-            vec![0.0; w_free.len()],
+            Start::at(vec![0.0; w_free.len()]),
             None,
             &descent_only(1e-10),
             &mut newton_iterations,
@@ -150,7 +150,7 @@ fn with_a_steep_law_the_descent_reaches_a_solution_from_any_start() {
                 step,
                 stiffness,
                 w_free,
-                start,
+                Start::at(start),
                 None,
                 &descent_only(1e-9),
                 &mut newton_iterations,

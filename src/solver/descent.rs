@@ -147,6 +147,24 @@ impl ContactStiffness {
     }
 }
 
+/// Where a descent starts.
+#[derive(Debug, Clone)]
+pub struct Start<'a> {
+    /// Tangential velocities on Γ_C (flat, node-major).
+    pub w: Vec<f64>,
+    /// The ξ a descent of the same step returned with these `w`, if they are its result: the
+    /// gradient K (w − w₀) = ℓ ξ is then known and not recomputed (one O(n_t²) product saved per
+    /// convexification iterate). `None` otherwise.
+    pub xi: Option<&'a [f64]>,
+}
+
+impl Start<'_> {
+    /// From velocities alone.
+    pub fn at(w: Vec<f64>) -> Self {
+        Start { w, xi: None }
+    }
+}
+
 /// How a descent ended without reaching the tolerance.
 #[derive(Debug, Clone, Copy)]
 pub struct DescentStall {
@@ -167,7 +185,7 @@ pub fn descend(
     step: &CondensedStep,
     stiffness: &ContactStiffness,
     w_free: &[f64],
-    mut w: Vec<f64>,
+    start: Start,
     frozen: Option<&[f64]>,
     params: &DescentParams,
     newton_iterations: &mut usize,
@@ -176,6 +194,7 @@ pub fn descend(
     let n_t = stiffness.n_t;
     let n_nodes = stiffness.weights.len();
     let law = step.friction;
+    let mut w = start.w;
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
     let g_min = |w: &[f64]| {
         match frozen {
@@ -189,8 +208,16 @@ pub fn descend(
     let mut w0 = vec![0.0; n_t];
     let mut y = vec![0.0; n_t];
     let mut xi = vec![0.0; n_t];
-    frozen_start(step, w_free, &w, &mut w0);
-    stiffness.gradient(&w, &w0, &mut y);
+    match start.xi {
+        Some(xi) => y
+            .iter_mut()
+            .enumerate()
+            .for_each(|(j, y)| *y = stiffness.weights[j / t] * xi[j]),
+        None => {
+            frozen_start(step, w_free, &w, &mut w0);
+            stiffness.gradient(&w, &w0, &mut y);
+        }
+    }
     let mut newton_tried_at = f64::INFINITY;
     let mut residual = f64::INFINITY;
     for sweep in 1..=params.max_sweeps {

@@ -16,7 +16,7 @@
 use std::cell::OnceCell;
 
 use super::condensed::Condensation;
-use super::descent::{descend, ContactStiffness, DescentParams};
+use super::descent::{descend, ContactStiffness, DescentParams, Start};
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{contact_tangential, PaperParams, PaperSolver};
 use super::system::{State, StepSystem};
@@ -149,7 +149,8 @@ impl<'a> FastSolver<'a> {
     }
 
     /// The convex subproblem of a convexification iterate (bounds frozen at `bounds`), solved
-    /// by the descent to `tolerance` from the iterate `(w, ξ)`: no factorization, a few sweeps
+    /// by the descent to `tolerance` from the iterate `(w, ξ)` (`descended`: the previous
+    /// subproblem's result, whose gradient ℓ ξ carries over): no factorization, a few sweeps
     /// of O(n_t²) each. Semismooth Newton (one dense n_t × n_t LU per iteration, ≈ 0.1 s each at
     /// 880 tangential unknowns in 3D, where its matrix changes with every slip direction) does
     /// it only where the descent is switched off (`max_sweeps` = 0). Measured on the 2D
@@ -159,7 +160,7 @@ impl<'a> FastSolver<'a> {
         &self,
         step: &CondensedStep,
         w_free: &[f64],
-        (w, xi): (&[f64], &[f64]),
+        (w, xi, descended): (&[f64], &[f64], bool),
         bounds: &[f64],
         tolerance: f64,
         info: &mut StepInfo,
@@ -176,7 +177,11 @@ impl<'a> FastSolver<'a> {
             newton: self.params,
         };
         let stiffness = self.stiffness(step.tangential)?;
-        let result = descend(step, stiffness, w_free, w.to_vec(), Some(bounds), &params, &mut 0);
+        let start = Start {
+            w: w.to_vec(),
+            xi: descended.then_some(xi),
+        };
+        let result = descend(step, stiffness, w_free, start, Some(bounds), &params, &mut 0);
         info.inner_iterations += result.as_ref().map_or(self.max_sweeps, |r| r.iterations);
         Ok(result.ok())
     }
@@ -198,7 +203,15 @@ impl<'a> FastSolver<'a> {
             newton: self.params,
         };
         let mut newton_iterations = 0;
-        let outcome = descend(step, stiffness, w_free, w, None, &params, &mut newton_iterations);
+        let outcome = descend(
+            step,
+            stiffness,
+            w_free,
+            Start::at(w),
+            None,
+            &params,
+            &mut newton_iterations,
+        );
         info.newton_iterations += newton_iterations;
         match outcome {
             Ok(result) => {
@@ -244,7 +257,7 @@ impl<'a> FastSolver<'a> {
                 .collect();
             let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
             let Some(inner) = self
-                .convex_subproblem(step, w_free, (&w, &xi), &bounds, inner_tolerance, info)
+                .convex_subproblem(step, w_free, (&w, &xi, m > 1), &bounds, inner_tolerance, info)
                 .map_err(SolveError::Other)?
             else {
                 // The convex subproblem's Newton stalled: report how far the current iterate is
