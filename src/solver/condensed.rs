@@ -137,7 +137,7 @@ impl Condensation {
 
 /// a · b with eight independent partial sums, so that the loop vectorizes (a plain sum fixes
 /// the order of the additions and stays scalar); the Uzawa and residual loops live on it.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
     let mut lanes = [0.0; 8];
