@@ -37,7 +37,8 @@
 //! ([`super::system::StepSystem::free_step`]). The sweeps are our own loops over faer's
 //! supernodal layout (faer 0.24 has no forward/backward split for a supernodal LDLᵀ; measured as
 //! fast as its full solve). The price of the constraint on the ordering is a larger factor
-//! (+21 % in 2D at 49k unknowns): a full solve reads more, and the factorization does more. The
+//! (+21 % in 2D at 49k unknowns, +47–50 % in 3D, where the dense trailing supernode also doubles
+//! the factorization time): a full sweep reads more. The
 //! rejected alternatives: AMD on all unknowns with n_t column solves for the compliances (½–1 s
 //! in 2D, 12 s in 3D per set-up) and two full solves per step; a simplicial factor, whose
 //! trailing block is easier to read but whose numeric factorization is 4–8× slower
