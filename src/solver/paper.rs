@@ -14,7 +14,8 @@
 //! The paper runs this in GetFEM on the full system. Here the inner iterations run on the
 //! condensed contact problem ([`super::condensed`]): w(ξ) = w_free + C ξ + H h is exact (up to
 //! round-off) and costs a dense product on Γ_C instead of a solve; each outer iterate then costs
-//! one solve for the full fields that (77)–(80) measure.
+//! the full fields that (77)–(80) measure: a forward sweep over the contact block of the factor
+//! and one backward sweep over all of it, half a solve ([`StepSystem::loaded_state`]).
 
 use super::condensed::Condensation;
 use super::system::{State, StepSystem};
@@ -144,7 +145,7 @@ impl<'a> PaperSolver<'a> {
                     tolerance: self.params.inner_tolerance,
                 }));
             }
-            // The full fields of this iterate: one solve with the converged contact terms.
+            // The full fields of this iterate with the converged contact terms (half a solve).
             self.condensation.velocities(&w_free, &xi, &heat, &mut w);
             let next = self
                 .system
