@@ -134,6 +134,19 @@ impl ContactStiffness {
         })
     }
 
+    /// The friction stress that makes w satisfy the condensed equations (E1) exactly:
+    /// ξ = ℓ⁻¹ K (w − w_τ^free − H h(w)), computed afresh (two O(n_t²) products).
+    pub fn friction_stress(&self, step: &CondensedStep, w_free: &[f64], w: &[f64]) -> Vec<f64> {
+        let mut w0 = vec![0.0; self.n_t];
+        let mut y = vec![0.0; self.n_t];
+        frozen_start(step, w_free, w, &mut w0);
+        self.gradient(w, &w0, &mut y);
+        y.iter()
+            .enumerate()
+            .map(|(j, y)| y / self.weights[j / self.tangential])
+            .collect()
+    }
+
     /// y = K (w − w₀).
     fn gradient(&self, w: &[f64], w0: &[f64], y: &mut [f64]) {
         let diff: Vec<f64> = w.iter().zip(w0).map(|(a, b)| a - b).collect();
@@ -260,9 +273,11 @@ pub fn descend(
             }
         };
         xi_of(&y, &mut xi);
-        if step.law_residual(&w, &xi, frozen) / g_min(&w) <= params.tolerance {
+        if frozen.is_none() && step.law_residual(&w, &xi, frozen) / g_min(&w) <= params.tolerance {
             // Converged on the updated gradient: confirm on a fresh one (no drift of the
-            // updates), and carry it on if not.
+            // updates), and carry it on if not. (A convex subproblem's result is an iterate of
+            // the convexification loop, which confirms only the state it accepts:
+            // [`ContactStiffness::friction_stress`].)
             frozen_start(step, w_free, &w, &mut w0);
             stiffness.gradient(&w, &w0, &mut y);
             xi_of(&y, &mut xi);
@@ -304,11 +319,14 @@ pub fn descend(
 /// w₀ = w_τ^free + H h(w): the velocities of the step without friction, with the heat of w.
 fn frozen_start(step: &CondensedStep, w_free: &[f64], w: &[f64], w0: &mut [f64]) {
     let t = step.tangential;
-    let heat: Vec<f64> = (0..step.condensation.n_h)
+    let c = step.condensation;
+    let heat: Vec<f64> = (0..c.n_h)
         .map(|i| step.heat_rate * norm(&w[i * t..(i + 1) * t]))
         .collect();
-    let zero = vec![0.0; step.condensation.n_t];
-    step.condensation.velocities(w_free, &zero, &heat, w0);
+    for (r, w0) in w0.iter_mut().enumerate() {
+        let row = &c.heat[r * c.n_h..(r + 1) * c.n_h];
+        *w0 = w_free[r] + row.iter().zip(&heat).map(|(a, b)| a * b).sum::<f64>();
+    }
 }
 
 /// The local minimizer over s ∈ [0, r] of f(s) = ½ κ (s − r)² + ℓ φ(s) (φ' = b ≥ 0) reached

@@ -296,6 +296,18 @@ impl<'a> FastSolver<'a> {
             let change = checks.iter().fold(0.0f64, |m, c| m.max(c.1));
             inner_tolerance = (0.01 * change).clamp(self.params.tolerance, inner_tolerance);
             if checks.iter().all(|&(_, value, tol)| value <= tol) {
+                // The descent's ξ comes from gradients updated sweep by sweep: accept the state
+                // on a fresh one (E1 exactly), where the law must hold too.
+                if let Some(stiffness) = self.stiffness.get().filter(|_| self.max_sweeps > 0) {
+                    let fresh = stiffness.friction_stress(step, w_free, &inner.w);
+                    let law = step.law_residual(&inner.w, &fresh, None);
+                    if law / g_min.max(f64::MIN_POSITIVE) > tolerance {
+                        w = inner.w;
+                        xi = fresh;
+                        continue;
+                    }
+                    xi = fresh;
+                }
                 return Ok(NewtonResult {
                     w: inner.w,
                     xi,
