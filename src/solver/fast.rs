@@ -1,9 +1,12 @@
 //! The fast step solver: condensation onto Γ_C + semismooth Newton on the nonmonotone law
-//! ([`super::newton`]), with the convexification loop of Problem 17 (Newton inner solves) where
-//! the law is too steep, and the descent of [`super::descent`] where both fail.
+//! ([`super::newton`]), with the convexification loop of Problem 17 (its convex problems solved
+//! by the sweeps of [`super::descent`]) where the law is too steep, and the descent on the
+//! nonconvex energy where both fail.
 //!
-//! Per step: one solve for the free fields, a few dense Newton iterations on Γ_C, one solve
-//! for the full fields — against one solve per convexification iterate for the paper's solver.
+//! Per step: the forward sweep and the contact block of the backward one for w_τ^free, the
+//! iterations on Γ_C (dense, small), the contact block of the forward sweep and a full backward
+//! one for the fields ([`super::system`]): one sparse solve — against half a solve per
+//! convexification iterate for the paper's solver.
 //!
 //! The order of the three methods decides which solution a step with several gets: Newton from
 //! the previous step's state where the nodal problems are monotone (steepness below 1, then the
