@@ -2,23 +2,16 @@
 //! converge is cut back into substeps; a run that still stops leaves its frames, its last
 //! completed state and a summary that says what failed, by how much.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::Command;
 
+use common::coarse;
 use thermocontact::contact::friction::law_residual;
 use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
 use thermocontact::time::{contact_rows, Levels};
 use thermocontact::Scenario;
-
-fn coarse(overrides: &[&str]) -> Scenario {
-    let mut all = vec![
-        "mesh.nx=16".to_string(),
-        "mesh.ny=4".to_string(),
-        "time.steps=16".to_string(),
-    ];
-    all.extend(overrides.iter().map(|s| s.to_string()));
-    Scenario::load(None, &all).unwrap()
-}
 
 fn scratch(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("thermocontact-cutback-{tag}-{}", std::process::id()));

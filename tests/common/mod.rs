@@ -4,6 +4,14 @@
 use faer::linalg::solvers::Solve;
 use thermocontact::fem::sparse::CscMatrix;
 use thermocontact::material::{Isotropic, Material};
+use thermocontact::Scenario;
+
+/// The paper's example on a coarse grid (16 × 4 cells, 16 steps) with `key=value` overrides.
+pub fn coarse(overrides: &[&str]) -> Scenario {
+    let mut all: Vec<String> = ["mesh.nx=16", "mesh.ny=4", "time.steps=16"].map(String::from).to_vec();
+    all.extend(overrides.iter().map(|s| s.to_string()));
+    Scenario::load(None, &all).unwrap()
+}
 
 /// The material of the paper's Section 6 example.
 pub fn paper_material() -> Material {
