@@ -89,7 +89,7 @@ enum Command {
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
         /// Run the hard suite instead: long runs, a coarse k, steep slip weakening (α = 1000,
-        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 (a few minutes, most of it the
+        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 (about 2 minutes, most of it the
         /// 3D case). Prints for each case whether it completed, its cutbacks, the steps the
         /// descent finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
         /// case reads scenarios/paper3d.toml).
