@@ -36,7 +36,7 @@ pub struct FastSolver<'a> {
     params: NewtonParams,
     /// Cap on the descent's sweeps (0: no descent).
     max_sweeps: usize,
-    /// K = D⁻¹ on Γ_C, inverted when a step first needs the descent.
+    /// K = D⁻¹ on Γ_C, inverted at the first convexification iterate (or descent).
     stiffness: OnceCell<ContactStiffness>,
     steepness: f64,
 }
@@ -156,9 +156,9 @@ impl<'a> FastSolver<'a> {
     /// subproblem's result, whose gradient ℓ ξ carries over): no factorization, a few sweeps
     /// of O(n_t²) each. Semismooth Newton (one dense n_t × n_t LU per iteration, ≈ 0.1 s each at
     /// 880 tangential unknowns in 3D, where its matrix changes with every slip direction) does
-    /// it only where the descent is switched off (`max_sweeps` = 0). Measured on the 2D
-    /// reference run: 0.54 s on Γ_C with Newton, 0.22 s with the descent; 3D example: 32 s and
-    /// 6.6 s.
+    /// it only where the descent is switched off (`max_sweeps` = 0). Measured on Γ_C: the 2D
+    /// reference run 0.54 s with Newton, 0.10 s with the descent; the 3D example 162 s and
+    /// 0.8 s.
     fn convex_subproblem(
         &self,
         step: &CondensedStep,
