@@ -53,6 +53,7 @@ use faer::{Mat, Side};
 
 use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
+use super::system::norm2 as norm;
 use crate::contact::FrictionLaw;
 use crate::error::Error;
 
@@ -378,10 +379,6 @@ pub fn radial_minimizer(law: &dyn FrictionLaw, kappa: f64, ell: f64, r: f64, cur
     }
     // f' > 0 all the way down: the minimizer is s = 0. (Upwards a crossing always exists.)
     end
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 #[cfg(test)]

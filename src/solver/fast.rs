@@ -20,9 +20,9 @@ use std::cell::OnceCell;
 
 use super::condensed::Condensation;
 use super::descent::{descend, ContactStiffness, DescentParams, Start};
-use super::newton::{CondensedStep, NewtonParams, NewtonResult};
+use super::newton::{max_diff, CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{contact_tangential, PaperParams, PaperSolver};
-use super::system::{State, StepSystem};
+use super::system::{norm2 as norm, State, StepSystem};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::error::Error;
 use crate::problem::Problem;
@@ -329,12 +329,4 @@ impl<'a> FastSolver<'a> {
             tolerance,
         }))
     }
-}
-
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }

@@ -28,6 +28,7 @@ use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
 use super::condensed::Condensation;
+use super::system::norm2 as norm;
 use crate::contact::FrictionLaw;
 
 /// Settings of the semismooth Newton method.
@@ -319,7 +320,8 @@ fn slip_linearization(
     (a, b)
 }
 
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+/// max_i |a_i − b_i|.
+pub(super) fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }
 
@@ -330,8 +332,4 @@ fn invert_small(m: &[[f64; 2]; 2], t: usize) -> [[f64; 2]; 2] {
         let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
         [[m[1][1] / det, -m[0][1] / det], [-m[1][0] / det, m[0][0] / det]]
     }
-}
-
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
