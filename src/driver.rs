@@ -170,6 +170,19 @@ pub struct Summary {
 pub enum RunStatus {
     Completed,
     Failed,
+    /// Stopped from outside between two steps (SIGINT, SIGTERM, or the caller).
+    Interrupted,
+}
+
+impl RunStatus {
+    /// How a run that ended with `failure` (none: it completed) ended.
+    pub fn of(failure: Option<&Error>) -> Self {
+        match failure {
+            None => RunStatus::Completed,
+            Some(Error::Interrupted { .. }) => RunStatus::Interrupted,
+            Some(_) => RunStatus::Failed,
+        }
+    }
 }
 
 /// A step that went through substeps.
@@ -401,11 +414,7 @@ pub fn run_observed(
         peak_memory_mib: crate::bench::peak_memory_mib(),
         max_law_residual,
         cutbacks,
-        status: if failure.is_some() {
-            RunStatus::Failed
-        } else {
-            RunStatus::Completed
-        },
+        status: RunStatus::of(failure.as_ref()),
         failure: failure.as_ref().map(|e| FailureRecord::new(e, &state)),
         timings,
         outputs,

@@ -85,9 +85,50 @@ pub enum Error {
     /// Writing an output file failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    /// The run was stopped from outside between two steps (a signal, or a caller's observer).
+    #[error("the run was interrupted ({cause}) after step {step} (t = {time})")]
+    Interrupted {
+        /// The last completed time level and its time.
+        step: usize,
+        time: f64,
+        cause: Interruption,
+    },
     /// Reading an input file failed.
     #[error("cannot read {}: {source}", path.display())]
     Read { path: PathBuf, source: std::io::Error },
+}
+
+/// Who stopped a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Interruption {
+    /// SIGINT (Ctrl-C).
+    Interrupt,
+    /// SIGTERM (a batch system's stop).
+    Terminate,
+    /// The program driving the run (an observer of the time loop) asked it to stop.
+    Caller,
+}
+
+impl Interruption {
+    /// The shell's exit code for a process stopped by this: 128 + the signal's number.
+    pub fn exit_code(self) -> u8 {
+        match self {
+            Interruption::Interrupt => 130,
+            Interruption::Terminate => 143,
+            Interruption::Caller => 1,
+        }
+    }
+}
+
+impl std::fmt::Display for Interruption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Interruption::Interrupt => "SIGINT",
+            Interruption::Terminate => "SIGTERM",
+            Interruption::Caller => "stopped by the caller",
+        })
+    }
 }
 
 fn cutback_phrase(depth: usize) -> String {

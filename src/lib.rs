@@ -66,6 +66,6 @@ pub mod solver;
 pub mod time;
 pub mod verification;
 
-pub use error::Error;
+pub use error::{Error, Interruption};
 pub use problem::Problem;
 pub use scenario::Scenario;

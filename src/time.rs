@@ -271,11 +271,21 @@ pub struct Stopped {
 pub fn march(
     problem: &Problem,
     levels: &Levels,
+    observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
+) -> Result<State, Box<Stopped>> {
+    march_from(problem, levels, State::initial(problem), observer)
+}
+
+/// [`march`] from a state `start` at time level `start.n` (a restart): steps n = start.n + 1 … N.
+pub fn march_from(
+    problem: &Problem,
+    levels: &Levels,
+    start: State,
     mut observer: impl FnMut(&State, &StepInfo) -> Result<(), Error>,
 ) -> Result<State, Box<Stopped>> {
-    let mut state = State::initial(problem);
+    let mut state = start;
     let k = problem.time_step();
-    for n in 1..=problem.time.steps {
+    for n in state.n + 1..=problem.time.steps {
         let t = n as f64 * k;
         let step = levels.advance(&state, t, 0, n).and_then(|(mut next, info)| {
             // Substeps advanced the level once each; t_n is n k exactly.
