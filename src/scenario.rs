@@ -430,7 +430,28 @@ impl Scenario {
     /// `key.path=value` overrides; then validated. A relative `mesh.file` is taken relative to
     /// the current directory.
     pub fn load(file_text: Option<&str>, overrides: &[String]) -> Result<Self, Error> {
-        Self::load_in(file_text, overrides, None)
+        Self::load_in(file_text, overrides, None, None)
+    }
+
+    /// [`Scenario::load`] on a mesh given in memory (built by a program, e.g. from arrays): the
+    /// mesh replaces the structured generator as a `mesh.file` does — the default's geometry,
+    /// cell counts and tractions (on the rectangle's parts) go — and the boundary parts named in
+    /// the text and overrides are checked against the mesh's. The text may hold no `geometry`
+    /// and no `mesh` keys. The mesh is not part of [`Scenario::to_toml`]: load that text again
+    /// with the same mesh.
+    ///
+    /// ```
+    /// use thermocontact::{mesh, Scenario};
+    /// let m = mesh::rectangle(40.0, 10.0, 8, 2); // parts left, right, bottom, top
+    /// let s = Scenario::load_with_mesh(None, &["time.steps=4".into()], m).unwrap();
+    /// assert_eq!((s.dim(), s.structured(), s.time.steps), (2, None, 4));
+    /// ```
+    pub fn load_with_mesh(
+        file_text: Option<&str>,
+        overrides: &[String],
+        mesh: impl Into<Arc<Mesh>>,
+    ) -> Result<Self, Error> {
+        Self::load_in(file_text, overrides, None, Some(mesh.into()))
     }
 
     /// [`Scenario::load`] from a file: a relative `mesh.file` in it is taken relative to the
@@ -440,11 +461,19 @@ impl Scenario {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::load_in(Some(&text), overrides, path.parent())
+        Self::load_in(Some(&text), overrides, path.parent(), None)
     }
 
-    fn load_in(file_text: Option<&str>, overrides: &[String], folder: Option<&Path>) -> Result<Self, Error> {
+    fn load_in(
+        file_text: Option<&str>,
+        overrides: &[String],
+        folder: Option<&Path>,
+        given: Option<Arc<Mesh>>,
+    ) -> Result<Self, Error> {
         let mut table: Table = DEFAULT_TOML.parse().expect("built-in scenario parses");
+        if given.is_some() {
+            drop_generator(&mut table);
+        }
         if let Some(text) = file_text {
             let mut user: Table = text
                 .parse()
@@ -457,6 +486,9 @@ impl Scenario {
         }
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        if let Some(mesh) = given {
+            scenario.take_given_mesh(mesh)?;
+        }
         if let Some(file) = &mut scenario.mesh.file {
             *file = std::path::absolute(&*file).unwrap_or_else(|_| file.clone());
             let mesh = mesh::read_msh(file).map_err(Error::Mesh)?;
@@ -464,6 +496,25 @@ impl Scenario {
         }
         scenario.validate()?;
         Ok(scenario)
+    }
+
+    /// Takes a mesh given in memory ([`Scenario::load_with_mesh`]): with no other mesh keys.
+    fn take_given_mesh(&mut self, mesh: Arc<Mesh>) -> Result<(), Error> {
+        let beside = |key: &str, value: &dyn std::fmt::Debug| {
+            Err(invalid(
+                key,
+                value,
+                "no mesh keys beside a mesh given in memory (it replaces mesh.file and the generator)",
+            ))
+        };
+        match (&self.geometry, &self.mesh) {
+            (Some(g), _) => return beside("geometry.lengths", &g.lengths),
+            (_, MeshSpec { file: Some(file), .. }) => return beside("mesh.file", file),
+            (_, MeshSpec { nz: Some(nz), .. }) => return beside("mesh.nz", nz),
+            _ => {}
+        }
+        self.loaded = LoadedMesh(Some(mesh));
+        Ok(())
     }
 
     /// The scenario as TOML (what a run saves beside its results).
@@ -532,7 +583,7 @@ impl Scenario {
 
     /// Checks every value against its admissible range.
     pub fn validate(&self) -> Result<(), Error> {
-        if self.mesh.file.is_none() {
+        if self.mesh.file.is_none() && self.loaded.0.is_none() {
             self.validate_structured()?;
         }
         let d = self.dim();
@@ -1042,13 +1093,19 @@ fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
             "no geometry beside mesh.file (the mesh file gives the geometry)",
         ));
     }
+    drop_generator(base);
+    Ok(())
+}
+
+/// Removes the structured generator from `base` for a mesh from elsewhere (a file, or given in
+/// memory): its geometry and cell counts, and the tractions on the rectangle's parts.
+fn drop_generator(base: &mut Table) {
     base.remove("geometry");
     base.insert("mesh".into(), Value::Table(Table::new()));
-    // The default's tractions act on the rectangle's parts: a mesh file has its own.
+    // The default's tractions act on the rectangle's parts: another mesh has its own.
     if let Some(Value::Table(loads)) = base.get_mut("loads") {
         loads.insert("traction".into(), Value::Array(Vec::new()));
     }
-    Ok(())
 }
 
 fn type_name(v: &Value) -> &'static str {

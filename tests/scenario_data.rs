@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+use thermocontact::mesh::Mesh;
 use thermocontact::Scenario;
 
 fn coarse(overrides: &[&str]) -> Result<Scenario, thermocontact::Error> {
@@ -132,6 +133,62 @@ fn removed_and_conflicting_mesh_keys_are_explained() {
         e.contains("boundary.contact") && e.contains("middle") && e.contains("\"top\""),
         "{e}"
     );
+}
+
+/// A mesh given in memory (`Scenario::load_with_mesh`) with parts named its own way runs as the
+/// generated mesh it copies; the scenario's boundary parts are checked against it, and mesh keys
+/// beside it are refused by name.
+#[test]
+fn a_mesh_given_in_memory_runs_like_the_generated_one() {
+    let generated = thermocontact::mesh::rectangle(40.0, 10.0, 16, 4);
+    let renamed = ["clamp", "free", "contact", "load"].map(String::from).to_vec();
+    let mesh = Mesh::new(
+        2,
+        generated.coords.clone(),
+        generated.cells.clone(),
+        generated.facets.clone(),
+        generated.facet_parts.clone(),
+        renamed,
+    )
+    .unwrap();
+    let text = r#"
+        [time]
+        steps = 16
+        [boundary]
+        dirichlet = ["clamp"]
+        neumann = ["load", "free"]
+        contact = ["contact"]
+        [[loads.traction]]
+        part = "load"
+        constant = [0.0, 0.0]
+        rate = [0.0, -800.0]
+    "#;
+    let given = Scenario::load_with_mesh(Some(text), &[], mesh.clone()).unwrap();
+    assert_eq!((given.dim(), given.structured()), (2, None));
+    assert_eq!(final_u(&given), final_u(&coarse(&[]).unwrap()));
+    // Its TOML holds no mesh: loaded again with the same mesh, it is the same scenario.
+    let again = Scenario::load_with_mesh(Some(&given.to_toml()), &[], mesh.clone()).unwrap();
+    assert_eq!(again, given);
+
+    let e = Scenario::load_with_mesh(Some(text), &[r#"boundary.contact=["bottom"]"#.into()], mesh.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("boundary.contact") && e.contains("bottom") && e.contains("\"clamp\""),
+        "{e}"
+    );
+    let e = Scenario::load_with_mesh(Some(text), &["mesh.nz=4".into()], mesh.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("mesh.nz") && e.contains("in memory"), "{e}");
+    let e = Scenario::load_with_mesh(Some(text), &["mesh.nx=4".into()], mesh.clone())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("mesh.nx"), "{e}");
+    let e = Scenario::load_with_mesh(Some(&format!("{text}\n[geometry]\nlengths = [1.0, 1.0]")), &[], mesh)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("geometry"), "{e}");
 }
 
 /// Γ_D may be empty: the paper's example held by friction alone still runs.
