@@ -1,0 +1,33 @@
+"""The examples run (at reduced size) and say what they computed. Each needs matplotlib, the Gmsh
+one also gmsh; without them the test is skipped."""
+
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize(
+    "script, args, needs, says",
+    [
+        ("paper_example.py", ["--nx", "32", "--set", "time.steps=16"], ["matplotlib"], "slip nodes (the paper"),
+        ("sweep_expansion.py", ["--nx", "16", "--values", "1e-4,1e-3"], ["matplotlib"], "figure written"),
+        ("gmsh_plate.py", ["--size", "2"], ["matplotlib", "gmsh"], "unknowns"),
+    ],
+)
+def test_example_runs(tmp_path, script, args, needs, says):
+    for module in needs:
+        pytest.importorskip(module)
+    figure = tmp_path / "figure.png"
+    completed = subprocess.run(
+        [sys.executable, str(EXAMPLES / script), *args, "--out", str(figure)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    assert completed.returncode == 0, completed.stderr
+    assert says in completed.stdout and figure.stat().st_size > 0
