@@ -452,9 +452,14 @@ impl Scenario {
             resolve_mesh_file(&mut user, folder);
             overlay(&mut table, user, "")?;
         }
+        // All overrides form one table laid over at once, so that `friction.law=tresca` and
+        // `friction.bound=100` together switch the law (one at a time, the second would meet
+        // the first's table, which the switch has emptied).
+        let mut assigned = Table::new();
         for assignment in overrides {
-            apply_override(&mut table, assignment)?;
+            merge(&mut assigned, parse_override(assignment)?);
         }
+        overlay(&mut table, assigned, "")?;
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
         if let Some(file) = &mut scenario.mesh.file {
@@ -1096,8 +1101,9 @@ fn coerce(base: &Value, user: Value) -> Value {
     }
 }
 
-/// Applies `a.b.c=value`; the value is read as TOML, or as a plain string if it is not TOML.
-fn apply_override(table: &mut Table, assignment: &str) -> Result<(), Error> {
+/// Reads `a.b.c=value` as the nested table {a = {b = {c = value}}}; the value is read as TOML,
+/// or as a plain string if it is not TOML.
+fn parse_override(assignment: &str) -> Result<Table, Error> {
     let Some((path, raw)) = assignment.split_once('=') else {
         return Err(Error::InvalidValue {
             key: assignment.to_string(),
@@ -1110,19 +1116,28 @@ fn apply_override(table: &mut Table, assignment: &str) -> Result<(), Error> {
         Ok(mut t) => t.remove("v").expect("the key just written"),
         Err(_) => Value::String(raw.to_string()),
     };
-    let mut nested = Table::new();
-    let keys: Vec<&str> = path.split('.').collect();
-    // Build {a = {b = {c = value}}} and overlay it, so overrides get the same checks as files.
-    let mut current = value;
-    for key in keys.iter().rev() {
-        let mut t = Table::new();
-        t.insert(key.to_string(), current);
-        current = Value::Table(t);
+    let (parents, last) = match path.rsplit_once('.') {
+        Some((parents, last)) => (parents.split('.').collect(), last),
+        None => (Vec::new(), path),
+    };
+    let mut table = Table::from_iter([(last.to_string(), value)]);
+    for key in parents.into_iter().rev() {
+        table = Table::from_iter([(key.to_string(), Value::Table(table))]);
     }
-    if let Value::Table(t) = current {
-        nested = t;
+    Ok(table)
+}
+
+/// Lays the override table `later` into `earlier`: tables merge key by key, anything else is
+/// replaced (the later override wins).
+fn merge(earlier: &mut Table, later: Table) {
+    for (key, value) in later {
+        match (earlier.get_mut(&key), value) {
+            (Some(Value::Table(e)), Value::Table(l)) => merge(e, l),
+            (_, value) => {
+                earlier.insert(key, value);
+            }
+        }
     }
-    overlay(table, nested, "")
 }
 
 #[cfg(test)]
@@ -1154,6 +1169,27 @@ mod tests {
         assert_eq!(s.time.final_time, 2.0);
         let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
         assert_eq!(t.friction, FrictionSpec::Tresca { bound: 3.0 });
+        let t = Scenario::load(None, &["friction.law=tresca".into(), "friction.bound=100".into()]).unwrap();
+        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 100.0 });
+        let back = Scenario::load(
+            None,
+            &[
+                "friction.law=tresca".into(),
+                "friction.bound=100".into(),
+                "friction={law=\"slip-weakening\", bound=150.0, a=1.0, b=0.2, alpha=100.0}".into(),
+                "friction.alpha=50".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(
+            back.friction,
+            FrictionSpec::SlipWeakening {
+                bound: 150.0,
+                a: 1.0,
+                b: 0.2,
+                alpha: 50.0
+            }
+        );
         let p = Scenario::load(None, &["solver.kind=paper".into()]).unwrap();
         assert_eq!(p.solver.kind, SolverKind::Paper);
     }
