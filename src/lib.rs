@@ -61,11 +61,12 @@ pub mod norms;
 pub mod output;
 pub mod problem;
 pub mod reproduction;
+pub mod resources;
 pub mod scenario;
 pub mod solver;
 pub mod time;
 pub mod verification;
 
-pub use error::{Error, Interruption};
+pub use error::{Error, FactorStage, Interruption};
 pub use problem::Problem;
 pub use scenario::Scenario;

@@ -286,10 +286,10 @@ impl DatumSpec {
             }
         };
         let finite = |values: &[f64]| {
-            if values.iter().all(|v| v.is_finite()) {
+            if values.iter().all(|v| v.is_finite() && v.abs() <= MAX_MAGNITUDE) {
                 Ok(())
             } else {
-                Err(invalid(key, &self.to_string(), "finite numbers"))
+                Err(invalid(key, &self.to_string(), "finite numbers of magnitude ≤ 1e18"))
             }
         };
         match self {
@@ -415,6 +415,7 @@ pub struct SolverSpec {
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     pub times: Vec<f64>,
+    pub checkpoint_every: usize,
     pub vtk: bool,
     pub csv: bool,
 }
@@ -543,6 +544,10 @@ impl Scenario {
         let d = self.dim();
         positive("time.final_time", self.time.final_time)?;
         at_least_one("time.steps", self.time.steps)?;
+        if self.time.steps > MAX_STEPS {
+            return Err(invalid("time.steps", &self.time.steps, "at most 1 000 000 steps"));
+        }
+        self.fits_in_memory()?;
 
         let parts = self.part_names();
         let mut seen: Vec<&str> = Vec::new();
@@ -644,6 +649,13 @@ impl Scenario {
         }
         non_negative("solver.slip_tolerance", s.slip_tolerance)?;
 
+        if self.output.times.len() > self.time.steps {
+            return Err(invalid(
+                "output.times",
+                &format!("{} times", self.output.times.len()),
+                &format!("at most one time per time level (time.steps = {})", self.time.steps),
+            ));
+        }
         for &t in &self.output.times {
             if !(t > 0.0 && t <= self.time.final_time * (1.0 + 1e-12)) {
                 return Err(invalid(
@@ -652,6 +664,34 @@ impl Scenario {
                     &format!("times in (0, T] with T = time.final_time = {}", self.time.final_time),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// Refuses a mesh whose run cannot fit in the machine's memory, before it is generated
+    /// ([`crate::resources`]).
+    fn fits_in_memory(&self) -> Result<(), Error> {
+        let d = self.dim();
+        let (nodes, keys) = match (&self.loaded.0, self.structured()) {
+            (Some(mesh), _) => (mesh.n_nodes() as f64, "mesh.file".to_string()),
+            (None, Some(s)) => {
+                let names = ["mesh.nx", "mesh.ny", "mesh.nz"];
+                let nodes = s.cells.iter().map(|&n| n as f64 + 1.0).product();
+                (nodes, names[..s.cells.len()].join(" × "))
+            }
+            (None, None) => return Ok(()),
+        };
+        let unknowns = (d + 1) as f64 * nodes;
+        let needed = crate::resources::estimated_memory(d, unknowns);
+        // Without /proc/meminfo, a bound no machine passes.
+        let available = crate::resources::machine_memory().unwrap_or(1e15);
+        if needed > available {
+            return Err(Error::TooLarge {
+                keys,
+                unknowns,
+                needed: crate::resources::human(needed),
+                available: crate::resources::human(available),
+            });
         }
         Ok(())
     }
@@ -673,7 +713,9 @@ impl Scenario {
             ));
         }
         for &l in &geometry.lengths {
-            positive("geometry.lengths", l)?;
+            if !(l >= LENGTH_RANGE.0 && l <= LENGTH_RANGE.1) {
+                return Err(invalid("geometry.lengths", &l, "lengths in [1e-6, 1e6]"));
+            }
         }
         for (key, count) in [("mesh.nx", self.mesh.nx), ("mesh.ny", self.mesh.ny)] {
             match count {
@@ -834,7 +876,23 @@ impl Scenario {
             csv: self.output.csv,
             slip_tolerance: self.solver.slip_tolerance,
             record: Some(self.to_toml()),
+            fingerprint: Some(self.fingerprint()),
+            checkpoint_every: (self.output.checkpoint_every > 0).then_some(self.output.checkpoint_every),
         }
+    }
+
+    /// SHA-256 of everything that defines the problem: the scenario without `[output]` and
+    /// `[solver]` (a run may be continued with other output times or solver settings, e.g. a
+    /// larger `solver.max_sweeps` after a failure) and without `mesh.file`'s path (the mesh has
+    /// a fingerprint of its own).
+    pub fn fingerprint(&self) -> String {
+        let mut table: Table = self.to_toml().parse().expect("a scenario's TOML parses");
+        table.remove("output");
+        table.remove("solver");
+        if let Some(Value::Table(mesh)) = table.get_mut("mesh") {
+            mesh.remove("file");
+        }
+        crate::output::checkpoint::text_fingerprint(&table.to_string())
     }
 
     /// Builds and runs the scenario without writing files (tests and studies); returns the
@@ -869,27 +927,39 @@ fn invalid(key: &str, value: &dyn std::fmt::Debug, expected: &str) -> Error {
     }
 }
 
+/// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
+/// right-hand side multiplied by others (ρ/k, k·E, lengths to the power d); beyond this the
+/// products overflow or swamp each other and the step matrix turns singular in floating point.
+/// Any consistent unit system (SI, mm–t–s) stays far inside.
+pub const MAX_MAGNITUDE: f64 = 1e18;
+
+/// The sane range of the box's lengths [m, or the unit of the lengths].
+pub const LENGTH_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// The most time steps a run may have (its per-step records stay in memory: ~100 bytes each).
+pub const MAX_STEPS: usize = 1_000_000;
+
 fn finite(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() {
+    if v.is_finite() && v.abs() <= MAX_MAGNITUDE {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a finite number"))
+        Err(invalid(key, &v, "a finite number of magnitude ≤ 1e18"))
     }
 }
 
 fn positive(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v > 0.0 {
+    if v.is_finite() && v > 0.0 && v <= MAX_MAGNITUDE {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a positive number"))
+        Err(invalid(key, &v, "a positive number ≤ 1e18"))
     }
 }
 
 fn non_negative(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v >= 0.0 {
+    if (0.0..=MAX_MAGNITUDE).contains(&v) {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a non-negative number"))
+        Err(invalid(key, &v, "a non-negative number ≤ 1e18"))
     }
 }
 
