@@ -56,6 +56,13 @@ pub enum Error {
         x: [f64; 3],
         value: Vec<f64>,
     },
+    /// Nodal initial fields whose sizes are not the mesh's.
+    #[error("`{label}` has fields of {found:?} values, but the mesh needs {expected:?} (u₀, u₁, θ₀)")]
+    InitialFieldSizes {
+        label: String,
+        found: Vec<usize>,
+        expected: Vec<usize>,
+    },
     /// Two boundary parts given roles share facets (one facet in two physical groups).
     #[error(
         "the boundary parts `{first}` and `{second}` share facets: give each facet one role (in Gmsh, put it in one physical group)"

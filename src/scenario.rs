@@ -17,7 +17,7 @@ use crate::error::Error;
 use crate::loads::{Datum, Expression};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
-use crate::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use crate::problem::{InitialFields, LoadTarget, Problem, ProblemBuilder, TimeGrid};
 use crate::solver::system::State;
 use crate::solver::{SolverKind, SolverParams};
 
@@ -142,6 +142,10 @@ pub struct MaterialSpec {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
+    /// A checkpoint of another run on the same mesh whose u, w, θ become u₀, u₁, θ₀ (the data
+    /// below are then unused); a path relative to the scenario file, stored resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<PathBuf>,
     pub displacement: DatumSpec,
     pub velocity: DatumSpec,
     pub temperature: DatumSpec,
@@ -437,6 +441,17 @@ impl Scenario {
     /// [`Scenario::load`] from a file: a relative `mesh.file` in it is taken relative to the
     /// file's folder.
     pub fn load_file(path: &Path, overrides: &[String]) -> Result<Self, Error> {
+        // A scenario is a page of settings; data arrays belong in mesh files. Parsing holds
+        // ~60× the text in memory, so a huge file is refused before it is read.
+        if let Ok(meta) = std::fs::metadata(path) {
+            if meta.len() > MAX_SCENARIO_BYTES {
+                return Err(Error::Scenario(format!(
+                    "{} has {} bytes; a scenario file has at most {MAX_SCENARIO_BYTES}",
+                    path.display(),
+                    meta.len()
+                )));
+            }
+        }
         let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
@@ -463,6 +478,9 @@ impl Scenario {
         overlay(&mut table, assigned, "")?;
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        if let Some(from) = &mut scenario.initial.from {
+            *from = std::path::absolute(&*from).unwrap_or_else(|_| from.clone());
+        }
         if let Some(file) = &mut scenario.mesh.file {
             *file = std::path::absolute(&*file).unwrap_or_else(|_| file.clone());
             let mesh = mesh::read_msh(file).map_err(Error::Mesh)?;
@@ -778,6 +796,10 @@ impl Scenario {
     /// The scenario's problem, ready for a builder's last touches (extra loads).
     pub fn builder(&self) -> Result<ProblemBuilder, Error> {
         let mesh = self.mesh()?;
+        let initial = match &self.initial.from {
+            Some(path) => Some(initial_state(path, &mesh)?),
+            None => None,
+        };
         let d = mesh.dim;
         let b = &self.boundary;
         let h = &self.heat_exchange;
@@ -811,6 +833,9 @@ impl Scenario {
             self.initial.temperature.to_datum("initial.temperature", 1)?,
             "initial.temperature",
         );
+        if let Some(fields) = initial {
+            builder = builder.initial_fields(fields, "initial.from");
+        }
         builder = match self.friction {
             FrictionSpec::SlipWeakening { bound, a, b, alpha } => builder.friction(SlipWeakening {
                 scale: bound,
@@ -908,13 +933,36 @@ fn names(list: &[String]) -> Vec<&str> {
 }
 
 /// Takes a relative `mesh.file` of a scenario file relative to the file's folder.
+/// u, w, θ of the checkpoint at `path` (`initial.from`), which must be of a run on `mesh`.
+fn initial_state(path: &Path, mesh: &Mesh) -> Result<InitialFields, Error> {
+    let checkpoint = crate::output::checkpoint::read(path)?;
+    if checkpoint.identity.mesh != crate::output::checkpoint::mesh_fingerprint(mesh) {
+        return Err(invalid(
+            "initial.from",
+            &path.display().to_string(),
+            "a checkpoint of a run on this scenario's mesh (its mesh differs)",
+        ));
+    }
+    let state = checkpoint.state;
+    Ok(InitialFields {
+        displacement: state.u,
+        velocity: state.w,
+        temperature: state.theta,
+    })
+}
+
+/// Paths in a scenario file (`mesh.file`, `initial.from`) are relative to its folder.
 fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
-    let (Some(folder), Some(Value::Table(mesh))) = (folder, user.get_mut("mesh")) else {
+    let Some(folder) = folder else {
         return;
     };
-    if let Some(Value::String(file)) = mesh.get_mut("file") {
-        if Path::new(file.as_str()).is_relative() {
-            *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+    for (table, key) in [("mesh", "file"), ("initial", "from")] {
+        if let Some(Value::Table(t)) = user.get_mut(table) {
+            if let Some(Value::String(file)) = t.get_mut(key) {
+                if Path::new(file.as_str()).is_relative() {
+                    *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+                }
+            }
         }
     }
 }
@@ -935,6 +983,9 @@ pub const MAX_MAGNITUDE: f64 = 1e18;
 
 /// The sane range of the box's lengths [m, or the unit of the lengths].
 pub const LENGTH_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// The largest scenario file read (1 MiB).
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
 
 /// The most time steps a run may have (its per-step records stay in memory: ~100 bytes each).
 pub const MAX_STEPS: usize = 1_000_000;
@@ -1008,7 +1059,13 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
 
 /// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
 /// and checked when the scenario is read.
-const OPTIONAL_KEYS: &[&str] = &["mesh.nz", "mesh.file", "boundary.symmetry", "loads.pressure"];
+const OPTIONAL_KEYS: &[&str] = &[
+    "mesh.nz",
+    "mesh.file",
+    "boundary.symmetry",
+    "loads.pressure",
+    "initial.from",
+];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
 /// any of these forms ([`DatumSpec`] checks the new value).

@@ -303,3 +303,33 @@ fn the_cli_stops_on_sigterm_survives_sigkill_and_restarts() {
     }
     std::fs::remove_dir_all(&whole).unwrap();
 }
+
+/// `initial.from`: a checkpoint's fields become the initial data of another run on the same
+/// mesh; a checkpoint of another mesh is refused, naming the key.
+#[test]
+fn initial_fields_come_from_a_checkpoint_of_the_same_mesh() {
+    let dir = scratch("initial-from");
+    let scenario = scenario();
+    let problem = scenario.build().unwrap();
+    let checkpoint = whole_checkpoint(&problem, &scenario.output_plan(), &dir);
+    let state = Restart::read(&checkpoint).unwrap().checkpoint.state;
+    assert_eq!(state.n, 3);
+    assert!(state.u.iter().any(|&u| u != 0.0));
+
+    let from = format!("initial.from={:?}", checkpoint.display().to_string());
+    let next = coarse(&[from.as_str(), "material.density=50"]).build().unwrap();
+    let close = |a: &[f64], b: &[f64]| {
+        let scale = b.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()));
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+    };
+    assert!(close(&next.initial.displacement, &state.u));
+    assert!(close(&next.initial.velocity, &state.w));
+    assert_eq!(next.initial.temperature, state.theta);
+
+    let other_mesh = coarse(&[from.as_str(), "mesh.nx=12"]).build().unwrap_err().to_string();
+    assert!(
+        other_mesh.contains("initial.from") && other_mesh.contains("mesh"),
+        "{other_mesh}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
