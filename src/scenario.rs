@@ -1053,7 +1053,18 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
     Error::InvalidValue {
         key,
         value: value.trim().to_string(),
-        expected: message,
+        expected: plain(&message),
+    }
+}
+
+/// serde's "invalid value: integer `-1`, expected usize" as what a user should write.
+fn plain(message: &str) -> String {
+    match message.rsplit_once(", expected ") {
+        Some((_, "usize" | "u64" | "u32")) => "a non-negative integer".into(),
+        Some((_, "a string")) => "a string".into(),
+        Some((_, "a boolean")) => "true or false".into(),
+        Some((_, expected)) if message.starts_with("invalid ") => expected.to_string(),
+        _ => message.to_string(),
     }
 }
 
@@ -1343,6 +1354,7 @@ mod tests {
         assert!(e.contains("coulomb"), "{e}");
         let e = Scenario::load(Some("[time]\nsteps = -4"), &[]).unwrap_err().to_string();
         assert!(e.contains("time.steps") && e.contains("-4"), "{e}");
+        assert!(e.ends_with("(expected a non-negative integer)"), "{e}");
         let e = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0, a=1.0}".into()])
             .unwrap_err()
             .to_string();
