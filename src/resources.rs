@@ -5,13 +5,13 @@
 //! of the examples (`summary.json`'s `factor_nnz`, README Performance): in 2D about 126 at 49k
 //! unknowns, growing like N^0.1 (nested-dissection-like fill, N log N); in 3D 757 at 17.6k,
 //! 1 300 at 47k and 2 416 at 291k, i.e. about 1 300 (N / 47 000)^{1/3}. A run's peak is about
-//! 27 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).
+//! 18–28 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).
 //! The estimate is for refusing runs that cannot fit, not a promise: within 1.5× of the
 //! measured peaks.
 
-/// Bytes of peak memory per factor entry (measured: 164 MiB for 6.2 M entries in 2D, 1.05 GB
-/// for 61 M in 3D with cutback levels).
-const BYTES_PER_ENTRY: f64 = 27.0;
+/// Bytes of peak memory per factor entry (measured: 164 MiB for 6.2 M entries in 2D, 28 bytes;
+/// 1.05 GB for 61 M in 3D with cutback levels, 18 bytes).
+const BYTES_PER_ENTRY: f64 = 24.0;
 
 /// Estimated peak memory of a run with `unknowns` unknowns in `dim` dimensions, bytes.
 pub fn estimated_memory(dim: usize, unknowns: f64) -> f64 {
