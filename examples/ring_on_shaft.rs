@@ -105,8 +105,10 @@ fn solve(ring: &Ring, n_radial: usize, n_around: usize, steps: usize, out: Optio
     };
     let options = RunOptions {
         out_dir: out,
-        progress: false,
         log: true,
+        // Each run of the example replaces the previous one's files.
+        overwrite: true,
+        ..RunOptions::default()
     };
     let summary = driver::run(&problem, &SolverParams::default(), &plan, &options).expect("the run converges");
 

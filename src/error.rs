@@ -18,6 +18,18 @@ pub enum Error {
         value: String,
         expected: String,
     },
+    /// A problem too large for the machine, found before anything is allocated.
+    #[error(
+        "{keys} give {unknowns:.3e} unknowns, which need about {needed} of memory (estimated for the direct \
+         factorization), but this machine has {available}: use fewer cells"
+    )]
+    TooLarge {
+        /// The keys that set the size.
+        keys: String,
+        unknowns: f64,
+        needed: String,
+        available: String,
+    },
     /// A boundary part the mesh does not have.
     #[error("the mesh has no boundary part `{name}` (named for {role}); its parts are {known:?}")]
     UnknownPart {
@@ -44,6 +56,13 @@ pub enum Error {
         x: [f64; 3],
         value: Vec<f64>,
     },
+    /// Nodal initial fields whose sizes are not the mesh's.
+    #[error("`{label}` has fields of {found:?} values, but the mesh needs {expected:?} (u₀, u₁, θ₀)")]
+    InitialFieldSizes {
+        label: String,
+        found: Vec<usize>,
+        expected: Vec<usize>,
+    },
     /// Two boundary parts given roles share facets (one facet in two physical groups).
     #[error(
         "the boundary parts `{first}` and `{second}` share facets: give each facet one role (in Gmsh, put it in one physical group)"
@@ -62,8 +81,11 @@ pub enum Error {
     #[error("scenario: {0}")]
     Scenario(String),
     /// The sparse factorization of the step matrix failed.
-    #[error("factorization of the step matrix failed: {0}")]
-    Factorization(String),
+    #[error(
+        "factoring the step matrix failed ({stage}: {detail}); the matrix is singular in floating point. It is \
+         built from {DATA_KEYS}: check their magnitudes"
+    )]
+    Factorization { stage: FactorStage, detail: String },
     /// The nonsmooth solver hit its iteration cap, at the step size k and at every cutback.
     #[error(
         "time step {step} (t = {time}) did not converge{}: {failure}",
@@ -78,8 +100,9 @@ pub enum Error {
     },
     /// A linear solve with the factored step matrix gave NaN or ±∞.
     #[error(
-        "a linear solve with the step matrix gave {non_finite} non-finite values among {unknowns} unknowns \
-         (the step matrix is singular, or the data overflow)"
+        "a linear solve with the step matrix gave {non_finite} non-finite values among {unknowns} unknowns: the \
+         step matrix is singular in floating point, or the data overflow. They come from {DATA_KEYS} and the \
+         loads: check their magnitudes"
     )]
     NonFiniteSolution { non_finite: usize, unknowns: usize },
     /// Writing an output file failed.
@@ -93,9 +116,48 @@ pub enum Error {
         time: f64,
         cause: Interruption,
     },
+    /// The output folder cannot be used (locked by another run, or holding another run's
+    /// results).
+    #[error(transparent)]
+    Folder(#[from] crate::output::folder::FolderError),
+    /// A checkpoint that cannot be read or does not belong to this run.
+    #[error(transparent)]
+    Checkpoint(#[from] crate::output::checkpoint::CheckpointError),
     /// Reading an input file failed.
     #[error("cannot read {}: {source}", path.display())]
     Read { path: PathBuf, source: std::io::Error },
+}
+
+/// The scenario keys the step matrix is built from (named where it turns out singular).
+const DATA_KEYS: &str = "material.density, material.young, material.poisson, material.viscosity_mu1, \
+                         material.viscosity_mu2, material.conductivity, material.heat_capacity, \
+                         material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps (k)";
+
+/// The stage of factoring the step matrix that failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FactorStage {
+    /// The fill-reducing ordering.
+    Ordering,
+    /// The symbolic LDLᵀ.
+    Symbolic,
+    /// The numeric LDLᵀ.
+    Numeric,
+    /// The factor's layout is not the supernodal one the sweeps read.
+    Layout,
+    /// The Cholesky factor of the contact compliance D on Γ_C (the descent's metric).
+    ContactCompliance,
+}
+
+impl std::fmt::Display for FactorStage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FactorStage::Ordering => "the ordering",
+            FactorStage::Symbolic => "the symbolic LDLᵀ",
+            FactorStage::Numeric => "the numeric LDLᵀ",
+            FactorStage::Layout => "the factor's layout",
+            FactorStage::ContactCompliance => "the contact compliance's Cholesky factor",
+        })
+    }
 }
 
 /// Who stopped a run.

@@ -44,8 +44,9 @@
 //! [`contact`] (per-node frames, laws) → [`problem`] (built by [`problem::ProblemBuilder`] from
 //! typed parts: the discrete problem) → [`solver`] (step system and nonsmooth solvers) →
 //! [`time`] (the one time loop, with cutback levels k/2, k/4, … where a step fails) →
-//! [`driver`] (a run: output, progress, timings, a failed run's record) → [`output`]
-//! (files); [`scenario`] translates TOML into the builder's parts (the core never sees it),
+//! [`driver`] (a run: its folder, output, checkpoints and restart, progress and batch logs,
+//! stopping on signals, timings, a stopped run's record) → [`output`] (files: VTK, CSV,
+//! checkpoints, the run folder's lock); [`resources`] estimates a run's memory before it starts; [`scenario`] translates TOML into the builder's parts (the core never sees it),
 //! [`norms`] measures; [`verification`] runs the convergence studies; [`reproduction`]
 //! regenerates the paper's Section 6 (figures and the study of its open points).
 
@@ -61,11 +62,12 @@ pub mod norms;
 pub mod output;
 pub mod problem;
 pub mod reproduction;
+pub mod resources;
 pub mod scenario;
 pub mod solver;
 pub mod time;
 pub mod verification;
 
-pub use error::{Error, Interruption};
+pub use error::{Error, FactorStage, Interruption};
 pub use problem::Problem;
 pub use scenario::Scenario;

@@ -15,11 +15,12 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use thermocontact::driver::{self, RunOptions, Summary};
+use thermocontact::driver::{self, RunOptions, StopFlag, Summary};
 use thermocontact::reproduction::study::{self, StudyPlan};
 use thermocontact::reproduction::{self as repro, FigureOptions, FiguresMade};
 use thermocontact::scenario::{Scenario, DEFAULT_TOML};
 use thermocontact::verification::{self, study::LevelRun};
+use thermocontact::Interruption;
 
 /// Dynamic frictional contact of thermo-viscoelastic bodies with nonmonotone (slip-weakening)
 /// friction: the P1 / backward-Euler scheme of Bartosz, Danan & Szafraniec, Comput. Math. Appl.
@@ -60,10 +61,22 @@ enum Command {
     Run {
         #[command(flatten)]
         scenario: ScenarioArgs,
-        /// Output folder (created if missing).
+        /// Output folder (created if missing). A run locks it while it runs, and refuses a
+        /// folder that holds another run's results (see --overwrite and --restart).
         #[arg(long, default_value = "out")]
         out: PathBuf,
-        /// No progress bar.
+        /// Remove the results of the previous run in the output folder first (only the files a
+        /// run writes: summary.json, solution.pvd, the frames, steps.csv, scenario.toml,
+        /// checkpoint.bin; other files stay).
+        #[arg(long)]
+        overwrite: bool,
+        /// Continue the run stopped in DIR (interrupted, failed, or killed after a checkpoint)
+        /// from DIR/checkpoint.bin, writing into DIR. The scenario is DIR/scenario.toml unless
+        /// one is given; it must describe the same problem (output and solver settings may
+        /// change). Frames after the checkpoint are replaced.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "overwrite"])]
+        restart: Option<PathBuf>,
+        /// No progress bar and no progress lines.
         #[arg(long)]
         quiet: bool,
     },
@@ -196,9 +209,38 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            match e.downcast_ref::<thermocontact::Error>() {
+                // 130 / 143, as the shell reports a process ended by SIGINT / SIGTERM.
+                Some(thermocontact::Error::Interrupted { cause, .. }) => ExitCode::from(cause.exit_code()),
+                _ => ExitCode::FAILURE,
+            }
         }
     }
+}
+
+/// SIGINT and SIGTERM ask the run to stop after the current step (and say so on stderr); a
+/// second one ends the process at once.
+fn stop_on_signals() -> anyhow::Result<StopFlag> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let flag = StopFlag::new();
+    let armed = Arc::new(AtomicBool::new(false));
+    for (signal, cause) in [(SIGINT, Interruption::Interrupt), (SIGTERM, Interruption::Terminate)] {
+        // Registered first, so that it sees `armed` as the previous signal left it.
+        signal_hook::flag::register_conditional_shutdown(signal, 128 + signal, Arc::clone(&armed))?;
+        signal_hook::flag::register_usize(signal, flag.atomic(), StopFlag::code(cause))?;
+        signal_hook::flag::register(signal, Arc::clone(&armed))?;
+    }
+    // A handler may not print; this thread tells the user that the stop request was heard.
+    std::thread::spawn(move || loop {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        if armed.load(Ordering::SeqCst) {
+            eprintln!("\nstopping after the current step (a second Ctrl-C stops at once, and loses that step)");
+            break;
+        }
+    });
+    Ok(flag)
 }
 
 fn execute(cli: Cli) -> anyhow::Result<()> {
@@ -226,22 +268,52 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             study,
             out,
         } => converge(scenario, levels, study, out),
-        Command::Run { scenario, out, quiet } => {
-            let scenario = scenario.load()?;
+        Command::Run {
+            scenario,
+            out,
+            overwrite,
+            restart,
+            quiet,
+        } => {
+            let (scenario, out, restart) = match restart {
+                None => (scenario.load()?, out, None),
+                Some(dir) => {
+                    let scenario = match &scenario.scenario {
+                        Some(_) => scenario.load()?,
+                        None => Scenario::load_file(&dir.join("scenario.toml"), &scenario.overrides)?,
+                    };
+                    let checkpoint = driver::Restart::read(&dir.join(driver::CHECKPOINT_FILE))?;
+                    (scenario, dir, Some(checkpoint))
+                }
+            };
             print_setup(&scenario);
+            if let Some(restart) = &restart {
+                println!(
+                    "continuing from step {} (t = {}) of {}",
+                    restart.checkpoint.state.n,
+                    restart.checkpoint.state.t,
+                    restart.path.display()
+                );
+            }
             let problem = scenario.build()?;
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,
                 log: true,
+                overwrite,
+                stop: Some(stop_on_signals()?),
+                restart,
             };
             let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
-                .inspect_err(|_| {
-                    eprintln!(
+                .inspect_err(|error| match error {
+                    thermocontact::Error::Folder(_) | thermocontact::Error::Checkpoint(_) => {}
+                    _ => eprintln!(
                         "the run stopped; what it computed is in {}/ (solution.pvd with the last completed \
-                         step, summary.json with \"status\": \"failed\")",
+                         step, checkpoint.bin to continue with `thermocontact run --restart {}`, summary.json \
+                         with the status and the reason)",
+                        out.display(),
                         out.display()
-                    )
+                    ),
                 })?;
             print_summary(&summary);
             println!(

@@ -191,6 +191,8 @@ pub struct ProblemBuilder {
     heating: Box<dyn FrictionalHeating>,
     loads: Vec<(LoadTarget, Datum, String)>,
     initial: [(Datum, &'static str); 3],
+    /// Nodal initial fields that replace the three data above (a checkpoint of another run).
+    initial_fields: Option<(InitialFields, &'static str)>,
     extra_loads: Option<Box<dyn ExtraLoads>>,
 }
 
@@ -226,6 +228,7 @@ impl ProblemBuilder {
                 (Datum::Constant(vec![0.0; d]), INITIAL_NAMES[1]),
                 (Datum::Constant(vec![0.0]), INITIAL_NAMES[2]),
             ],
+            initial_fields: None,
             extra_loads: None,
         }
     }
@@ -304,6 +307,13 @@ impl ProblemBuilder {
     }
 
     /// θ₀ (one component), named `label` in errors.
+    /// u₀, u₁ and θ₀ as nodal values (d, d and 1 per node; e.g. the state of another run),
+    /// replacing the three initial data; `label` names them in errors.
+    pub fn initial_fields(mut self, fields: InitialFields, label: &'static str) -> Self {
+        self.initial_fields = Some((fields, label));
+        self
+    }
+
     pub fn initial_temperature(mut self, datum: Datum, label: &'static str) -> Self {
         self.initial[2] = (datum, label);
         self
@@ -403,11 +413,35 @@ impl ProblemBuilder {
             .map(|&f| if f { self.boundary_temperature } else { 0.0 })
             .collect();
 
-        let [(u0, u0_label), (u1, u1_label), (theta0, theta0_label)] = self.initial;
-        let initial = InitialFields {
-            displacement: in_velocity_space(&mesh, &velocity, &u0, u0_label)?,
-            velocity: in_velocity_space(&mesh, &velocity, &u1, u1_label)?,
-            temperature: nodal_values(&mesh, &theta0, 0.0, theta0_label)?,
+        let initial = match self.initial_fields {
+            None => {
+                let [(u0, u0_label), (u1, u1_label), (theta0, theta0_label)] = self.initial;
+                InitialFields {
+                    displacement: admissible(&mesh, &velocity, nodal_values(&mesh, &u0, 0.0, u0_label)?, u0_label)?,
+                    velocity: admissible(&mesh, &velocity, nodal_values(&mesh, &u1, 0.0, u1_label)?, u1_label)?,
+                    temperature: nodal_values(&mesh, &theta0, 0.0, theta0_label)?,
+                }
+            }
+            Some((fields, label)) => {
+                let n = mesh.n_nodes();
+                let sizes = [
+                    fields.displacement.len(),
+                    fields.velocity.len(),
+                    fields.temperature.len(),
+                ];
+                if sizes != [n * d, n * d, n] {
+                    return Err(Error::InitialFieldSizes {
+                        label: label.to_string(),
+                        found: sizes.to_vec(),
+                        expected: vec![n * d, n * d, n],
+                    });
+                }
+                InitialFields {
+                    displacement: admissible(&mesh, &velocity, fields.displacement, label)?,
+                    velocity: admissible(&mesh, &velocity, fields.velocity, label)?,
+                    temperature: fields.temperature,
+                }
+            }
         };
 
         Ok(Problem {
@@ -523,8 +557,8 @@ fn load_part(mesh: &Mesh, parts: &BoundaryParts, label: &str, name: &str) -> Res
 /// The datum at the nodes at t = 0, which must lie in E^h: zero on Γ_D, no normal component on
 /// Γ_C, none across a symmetry plane. Data that do not are an error rather than silently
 /// projected.
-fn in_velocity_space(mesh: &Mesh, space: &VelocitySpace, datum: &Datum, label: &str) -> Result<Vec<f64>, Error> {
-    let full = nodal_values(mesh, datum, 0.0, label)?;
+/// Nodal values `full` (d per node) as an element of E^h, or the node where they leave it.
+fn admissible(mesh: &Mesh, space: &VelocitySpace, full: Vec<f64>, label: &str) -> Result<Vec<f64>, Error> {
     let projected = space.prolong(&space.restrict_values(&full));
     let scale = full.iter().fold(0.0f64, |s, v| s.max(v.abs()));
     let d = mesh.dim;

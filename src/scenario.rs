@@ -17,7 +17,7 @@ use crate::error::Error;
 use crate::loads::{Datum, Expression};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
-use crate::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use crate::problem::{InitialFields, LoadTarget, Problem, ProblemBuilder, TimeGrid};
 use crate::solver::system::State;
 use crate::solver::{SolverKind, SolverParams};
 
@@ -142,6 +142,10 @@ pub struct MaterialSpec {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
+    /// A checkpoint of another run on the same mesh whose u, w, θ become u₀, u₁, θ₀ (the data
+    /// below are then unused); a path relative to the scenario file, stored resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<PathBuf>,
     pub displacement: DatumSpec,
     pub velocity: DatumSpec,
     pub temperature: DatumSpec,
@@ -286,10 +290,10 @@ impl DatumSpec {
             }
         };
         let finite = |values: &[f64]| {
-            if values.iter().all(|v| v.is_finite()) {
+            if values.iter().all(|v| v.is_finite() && v.abs() <= MAX_MAGNITUDE) {
                 Ok(())
             } else {
-                Err(invalid(key, &self.to_string(), "finite numbers"))
+                Err(invalid(key, &self.to_string(), "finite numbers of magnitude ≤ 1e18"))
             }
         };
         match self {
@@ -415,6 +419,7 @@ pub struct SolverSpec {
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     pub times: Vec<f64>,
+    pub checkpoint_every: usize,
     pub vtk: bool,
     pub csv: bool,
 }
@@ -457,6 +462,17 @@ impl Scenario {
     /// [`Scenario::load`] from a file: a relative `mesh.file` in it is taken relative to the
     /// file's folder.
     pub fn load_file(path: &Path, overrides: &[String]) -> Result<Self, Error> {
+        // A scenario is a page of settings; data arrays belong in mesh files. Parsing holds
+        // ~60× the text in memory, so a huge file is refused before it is read.
+        if let Ok(meta) = std::fs::metadata(path) {
+            if meta.len() > MAX_SCENARIO_BYTES {
+                return Err(Error::Scenario(format!(
+                    "{} has {} bytes; a scenario file has at most {MAX_SCENARIO_BYTES}",
+                    path.display(),
+                    meta.len()
+                )));
+            }
+        }
         let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
@@ -481,13 +497,21 @@ impl Scenario {
             resolve_mesh_file(&mut user, folder);
             overlay(&mut table, user, "")?;
         }
+        // All overrides form one table laid over at once, so that `friction.law=tresca` and
+        // `friction.bound=100` together switch the law (one at a time, the second would meet
+        // the first's table, which the switch has emptied).
+        let mut assigned = Table::new();
         for assignment in overrides {
-            apply_override(&mut table, assignment)?;
+            merge(&mut assigned, parse_override(assignment)?);
         }
+        overlay(&mut table, assigned, "")?;
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
         if let Some(mesh) = given {
             scenario.take_given_mesh(mesh)?;
+        }
+        if let Some(from) = &mut scenario.initial.from {
+            *from = std::path::absolute(&*from).unwrap_or_else(|_| from.clone());
         }
         if let Some(file) = &mut scenario.mesh.file {
             *file = std::path::absolute(&*file).unwrap_or_else(|_| file.clone());
@@ -589,6 +613,10 @@ impl Scenario {
         let d = self.dim();
         positive("time.final_time", self.time.final_time)?;
         at_least_one("time.steps", self.time.steps)?;
+        if self.time.steps > MAX_STEPS {
+            return Err(invalid("time.steps", &self.time.steps, "at most 1 000 000 steps"));
+        }
+        self.fits_in_memory()?;
 
         let parts = self.part_names();
         let mut seen: Vec<&str> = Vec::new();
@@ -690,6 +718,13 @@ impl Scenario {
         }
         non_negative("solver.slip_tolerance", s.slip_tolerance)?;
 
+        if self.output.times.len() > MAX_OUTPUT_TIMES {
+            return Err(invalid(
+                "output.times",
+                &format!("{} times", self.output.times.len()),
+                "at most 100 000 output times (each one a frame)",
+            ));
+        }
         for &t in &self.output.times {
             if !(t > 0.0 && t <= self.time.final_time * (1.0 + 1e-12)) {
                 return Err(invalid(
@@ -698,6 +733,34 @@ impl Scenario {
                     &format!("times in (0, T] with T = time.final_time = {}", self.time.final_time),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// Refuses a mesh whose run cannot fit in the machine's memory, before it is generated
+    /// ([`crate::resources`]).
+    fn fits_in_memory(&self) -> Result<(), Error> {
+        let d = self.dim();
+        let (nodes, keys) = match (&self.loaded.0, self.structured()) {
+            (Some(mesh), _) => (mesh.n_nodes() as f64, "mesh.file".to_string()),
+            (None, Some(s)) => {
+                let names = ["mesh.nx", "mesh.ny", "mesh.nz"];
+                let nodes = s.cells.iter().map(|&n| n as f64 + 1.0).product();
+                (nodes, names[..s.cells.len()].join(" × "))
+            }
+            (None, None) => return Ok(()),
+        };
+        let unknowns = (d + 1) as f64 * nodes;
+        let needed = crate::resources::estimated_memory(d, unknowns);
+        // Without /proc/meminfo, a bound no machine passes.
+        let available = crate::resources::machine_memory().unwrap_or(1e15);
+        if needed > available {
+            return Err(Error::TooLarge {
+                keys,
+                unknowns,
+                needed: crate::resources::human(needed),
+                available: crate::resources::human(available),
+            });
         }
         Ok(())
     }
@@ -719,7 +782,9 @@ impl Scenario {
             ));
         }
         for &l in &geometry.lengths {
-            positive("geometry.lengths", l)?;
+            if !(l >= LENGTH_RANGE.0 && l <= LENGTH_RANGE.1) {
+                return Err(invalid("geometry.lengths", &l, "lengths in [1e-6, 1e6]"));
+            }
         }
         for (key, count) in [("mesh.nx", self.mesh.nx), ("mesh.ny", self.mesh.ny)] {
             match count {
@@ -782,6 +847,10 @@ impl Scenario {
     /// The scenario's problem, ready for a builder's last touches (extra loads).
     pub fn builder(&self) -> Result<ProblemBuilder, Error> {
         let mesh = self.mesh()?;
+        let initial = match &self.initial.from {
+            Some(path) => Some(initial_state(path, &mesh)?),
+            None => None,
+        };
         let d = mesh.dim;
         let b = &self.boundary;
         let h = &self.heat_exchange;
@@ -815,6 +884,9 @@ impl Scenario {
             self.initial.temperature.to_datum("initial.temperature", 1)?,
             "initial.temperature",
         );
+        if let Some(fields) = initial {
+            builder = builder.initial_fields(fields, "initial.from");
+        }
         builder = match self.friction {
             FrictionSpec::SlipWeakening { bound, a, b, alpha } => builder.friction(SlipWeakening {
                 scale: bound,
@@ -880,7 +952,23 @@ impl Scenario {
             csv: self.output.csv,
             slip_tolerance: self.solver.slip_tolerance,
             record: Some(self.to_toml()),
+            fingerprint: Some(self.fingerprint()),
+            checkpoint_every: (self.output.checkpoint_every > 0).then_some(self.output.checkpoint_every),
         }
+    }
+
+    /// SHA-256 of everything that defines the problem: the scenario without `[output]` and
+    /// `[solver]` (a run may be continued with other output times or solver settings, e.g. a
+    /// larger `solver.max_sweeps` after a failure) and without `mesh.file`'s path (the mesh has
+    /// a fingerprint of its own).
+    pub fn fingerprint(&self) -> String {
+        let mut table: Table = self.to_toml().parse().expect("a scenario's TOML parses");
+        table.remove("output");
+        table.remove("solver");
+        if let Some(Value::Table(mesh)) = table.get_mut("mesh") {
+            mesh.remove("file");
+        }
+        crate::output::checkpoint::text_fingerprint(&table.to_string())
     }
 
     /// Builds and runs the scenario without writing files (tests and studies); returns the
@@ -896,13 +984,36 @@ fn names(list: &[String]) -> Vec<&str> {
 }
 
 /// Takes a relative `mesh.file` of a scenario file relative to the file's folder.
+/// u, w, θ of the checkpoint at `path` (`initial.from`), which must be of a run on `mesh`.
+fn initial_state(path: &Path, mesh: &Mesh) -> Result<InitialFields, Error> {
+    let checkpoint = crate::output::checkpoint::read(path)?;
+    if checkpoint.identity.mesh != crate::output::checkpoint::mesh_fingerprint(mesh) {
+        return Err(invalid(
+            "initial.from",
+            &path.display().to_string(),
+            "a checkpoint of a run on this scenario's mesh (its mesh differs)",
+        ));
+    }
+    let state = checkpoint.state;
+    Ok(InitialFields {
+        displacement: state.u,
+        velocity: state.w,
+        temperature: state.theta,
+    })
+}
+
+/// Paths in a scenario file (`mesh.file`, `initial.from`) are relative to its folder.
 fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
-    let (Some(folder), Some(Value::Table(mesh))) = (folder, user.get_mut("mesh")) else {
+    let Some(folder) = folder else {
         return;
     };
-    if let Some(Value::String(file)) = mesh.get_mut("file") {
-        if Path::new(file.as_str()).is_relative() {
-            *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+    for (table, key) in [("mesh", "file"), ("initial", "from")] {
+        if let Some(Value::Table(t)) = user.get_mut(table) {
+            if let Some(Value::String(file)) = t.get_mut(key) {
+                if Path::new(file.as_str()).is_relative() {
+                    *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+                }
+            }
         }
     }
 }
@@ -915,27 +1026,45 @@ fn invalid(key: &str, value: &dyn std::fmt::Debug, expected: &str) -> Error {
     }
 }
 
+/// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
+/// right-hand side multiplied by others (ρ/k, k·E, lengths to the power d); beyond this the
+/// products overflow or swamp each other and the step matrix turns singular in floating point.
+/// Any consistent unit system (SI, mm–t–s) stays far inside.
+pub const MAX_MAGNITUDE: f64 = 1e18;
+
+/// The sane range of the box's lengths [m, or the unit of the lengths].
+pub const LENGTH_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// The most output times a scenario may list.
+pub const MAX_OUTPUT_TIMES: usize = 100_000;
+
+/// The largest scenario file read (1 MiB).
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+
+/// The most time steps a run may have (its per-step records stay in memory: ~100 bytes each).
+pub const MAX_STEPS: usize = 1_000_000;
+
 fn finite(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() {
+    if v.is_finite() && v.abs() <= MAX_MAGNITUDE {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a finite number"))
+        Err(invalid(key, &v, "a finite number of magnitude ≤ 1e18"))
     }
 }
 
 fn positive(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v > 0.0 {
+    if v.is_finite() && v > 0.0 && v <= MAX_MAGNITUDE {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a positive number"))
+        Err(invalid(key, &v, "a positive number ≤ 1e18"))
     }
 }
 
 fn non_negative(key: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v >= 0.0 {
+    if (0.0..=MAX_MAGNITUDE).contains(&v) {
         Ok(())
     } else {
-        Err(invalid(key, &v, "a non-negative number"))
+        Err(invalid(key, &v, "a non-negative number ≤ 1e18"))
     }
 }
 
@@ -978,13 +1107,30 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
     Error::InvalidValue {
         key,
         value: value.trim().to_string(),
-        expected: message,
+        expected: plain(&message),
+    }
+}
+
+/// serde's "invalid value: integer `-1`, expected usize" as what a user should write.
+fn plain(message: &str) -> String {
+    match message.rsplit_once(", expected ") {
+        Some((_, "usize" | "u64" | "u32")) => "a non-negative integer".into(),
+        Some((_, "a string")) => "a string".into(),
+        Some((_, "a boolean")) => "true or false".into(),
+        Some((_, expected)) if message.starts_with("invalid ") => expected.to_string(),
+        _ => message.to_string(),
     }
 }
 
 /// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
 /// and checked when the scenario is read.
-const OPTIONAL_KEYS: &[&str] = &["mesh.nz", "mesh.file", "boundary.symmetry", "loads.pressure"];
+const OPTIONAL_KEYS: &[&str] = &[
+    "mesh.nz",
+    "mesh.file",
+    "boundary.symmetry",
+    "loads.pressure",
+    "initial.from",
+];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
 /// any of these forms ([`DatumSpec`] checks the new value).
@@ -1153,8 +1299,9 @@ fn coerce(base: &Value, user: Value) -> Value {
     }
 }
 
-/// Applies `a.b.c=value`; the value is read as TOML, or as a plain string if it is not TOML.
-fn apply_override(table: &mut Table, assignment: &str) -> Result<(), Error> {
+/// Reads `a.b.c=value` as the nested table {a = {b = {c = value}}}; the value is read as TOML,
+/// or as a plain string if it is not TOML.
+fn parse_override(assignment: &str) -> Result<Table, Error> {
     let Some((path, raw)) = assignment.split_once('=') else {
         return Err(Error::InvalidValue {
             key: assignment.to_string(),
@@ -1167,19 +1314,28 @@ fn apply_override(table: &mut Table, assignment: &str) -> Result<(), Error> {
         Ok(mut t) => t.remove("v").expect("the key just written"),
         Err(_) => Value::String(raw.to_string()),
     };
-    let mut nested = Table::new();
-    let keys: Vec<&str> = path.split('.').collect();
-    // Build {a = {b = {c = value}}} and overlay it, so overrides get the same checks as files.
-    let mut current = value;
-    for key in keys.iter().rev() {
-        let mut t = Table::new();
-        t.insert(key.to_string(), current);
-        current = Value::Table(t);
+    let (parents, last) = match path.rsplit_once('.') {
+        Some((parents, last)) => (parents.split('.').collect(), last),
+        None => (Vec::new(), path),
+    };
+    let mut table = Table::from_iter([(last.to_string(), value)]);
+    for key in parents.into_iter().rev() {
+        table = Table::from_iter([(key.to_string(), Value::Table(table))]);
     }
-    if let Value::Table(t) = current {
-        nested = t;
+    Ok(table)
+}
+
+/// Lays the override table `later` into `earlier`: tables merge key by key, anything else is
+/// replaced (the later override wins).
+fn merge(earlier: &mut Table, later: Table) {
+    for (key, value) in later {
+        match (earlier.get_mut(&key), value) {
+            (Some(Value::Table(e)), Value::Table(l)) => merge(e, l),
+            (_, value) => {
+                earlier.insert(key, value);
+            }
+        }
     }
-    overlay(table, nested, "")
 }
 
 #[cfg(test)]
@@ -1211,6 +1367,27 @@ mod tests {
         assert_eq!(s.time.final_time, 2.0);
         let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
         assert_eq!(t.friction, FrictionSpec::Tresca { bound: 3.0 });
+        let t = Scenario::load(None, &["friction.law=tresca".into(), "friction.bound=100".into()]).unwrap();
+        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 100.0 });
+        let back = Scenario::load(
+            None,
+            &[
+                "friction.law=tresca".into(),
+                "friction.bound=100".into(),
+                "friction={law=\"slip-weakening\", bound=150.0, a=1.0, b=0.2, alpha=100.0}".into(),
+                "friction.alpha=50".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(
+            back.friction,
+            FrictionSpec::SlipWeakening {
+                bound: 150.0,
+                a: 1.0,
+                b: 0.2,
+                alpha: 50.0
+            }
+        );
         let p = Scenario::load(None, &["solver.kind=paper".into()]).unwrap();
         assert_eq!(p.solver.kind, SolverKind::Paper);
     }
@@ -1237,6 +1414,7 @@ mod tests {
         assert!(e.contains("coulomb"), "{e}");
         let e = Scenario::load(Some("[time]\nsteps = -4"), &[]).unwrap_err().to_string();
         assert!(e.contains("time.steps") && e.contains("-4"), "{e}");
+        assert!(e.ends_with("(expected a non-negative integer)"), "{e}");
         let e = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0, a=1.0}".into()])
             .unwrap_err()
             .to_string();

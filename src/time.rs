@@ -266,7 +266,7 @@ pub struct Stopped {
 
 /// The time loop: steps n = 1 … N from the initial state (10), each cut back where it does not
 /// converge; `observer` sees every new state with the step's solver figures and may stop the
-/// run with an error. Every run goes through here ([`crate::driver`] observes it for output,
+/// run with an error (the state it saw is then the last one reached). Every run goes through here ([`crate::driver`] observes it for output,
 /// progress and timings).
 pub fn march(
     problem: &Problem,
@@ -287,17 +287,19 @@ pub fn march_from(
     let k = problem.time_step();
     for n in state.n + 1..=problem.time.steps {
         let t = n as f64 * k;
-        let step = levels.advance(&state, t, 0, n).and_then(|(mut next, info)| {
-            // Substeps advanced the level once each; t_n is n k exactly.
-            next.n = n;
-            next.t = t;
-            observer(&next, &info)?;
-            Ok(next)
-        });
-        match step {
-            Ok(next) => state = next,
+        let (mut next, info) = match levels.advance(&state, t, 0, n) {
+            Ok(step) => step,
             Err(error) => return Err(Box::new(Stopped { error, last: state })),
+        };
+        // Substeps advanced the level once each; t_n is n k exactly.
+        next.n = n;
+        next.t = t;
+        // The step is complete even where its observer fails (an output error, a stop
+        // request): it is the last state reached.
+        if let Err(error) = observer(&next, &info) {
+            return Err(Box::new(Stopped { error, last: next }));
         }
+        state = next;
     }
     Ok(state)
 }

@@ -20,7 +20,8 @@ class Error(Exception):
 
 class ScenarioError(Error, ValueError):
     '''A scenario that is not valid: an unknown key, a value of the wrong type or out of range,
-    a boundary part the mesh lacks, data that cannot be evaluated. When the error is about one
+    a boundary part the mesh lacks, data that cannot be evaluated, a problem too large for the
+    machine's memory. When the error is about one
     key, e.key is its dotted path, e.value the value given and e.expected what was expected.'''
     __module__ = 'thermocontact'
 
@@ -35,7 +36,9 @@ class SolverError(Error, RuntimeError):
     __module__ = 'thermocontact'
 
 class FileError(Error, OSError):
-    '''An input file that cannot be read or an output file that cannot be written.'''
+    '''An input file that cannot be read, an output file that cannot be written, an output
+    folder that holds another run's results (run(..., overwrite=True)), a checkpoint that does
+    not belong to the run.'''
     __module__ = 'thermocontact'
 
 class Interrupted(Error):
@@ -94,11 +97,13 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
         | Error::InitialNotAdmissible { .. }
         | Error::PartsShareFacets { .. }
         | Error::CurvedSymmetryPart { .. }
+        | Error::InitialFieldSizes { .. }
+        | Error::TooLarge { .. }
         | Error::Load(_)
         | Error::Scenario(_) => "ScenarioError",
         Error::Mesh(_) => "MeshError",
-        Error::NotConverged { .. } | Error::Factorization(_) | Error::NonFiniteSolution { .. } => "SolverError",
-        Error::Output(_) | Error::Read { .. } => "FileError",
+        Error::NotConverged { .. } | Error::Factorization { .. } | Error::NonFiniteSolution { .. } => "SolverError",
+        Error::Output(_) | Error::Read { .. } | Error::Folder(_) | Error::Checkpoint(_) => "FileError",
         Error::Interrupted { .. } => "Interrupted",
         // A variant added to the core later: the base class, with its message.
         #[allow(unreachable_patterns)]

@@ -10,16 +10,17 @@
 //! while the script waits for a step, so other Python threads run meanwhile.
 
 use std::path::PathBuf;
-use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
+use std::time::Duration;
 
 use numpy::ndarray::Array3;
 use numpy::{PyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList};
-use thermocontact::driver::{self, contact_csv_header, contact_csv_rows, OutputPlan, RunOptions};
+use thermocontact::driver::{self, contact_csv_header, contact_csv_rows, OutputPlan, RunOptions, StopFlag};
 use thermocontact::output::fields;
 use thermocontact::solver::system::State;
 use thermocontact::solver::{SolverParams, StepInfo};
@@ -112,34 +113,76 @@ impl PySimulation {
         PyState::new(py, state, None, self.problem.clone(), self.plan().slip_tolerance, None)
     }
 
-    /// run(out=None, progress=False, log=False) -> RunResult
+    /// run(out=None, progress=False, log=False, overwrite=False) -> RunResult
     ///
     /// Runs all N steps, as `thermocontact run` does (the same driver): with `out`, the same
-    /// files in that folder (solution.pvd and .vtu frames, contact CSVs, summary.json,
-    /// scenario.toml, as the scenario's `output` table asks). Returns the states at the output
-    /// times, the state at T and the summary. `progress` draws the command line's progress bar
-    /// on stderr, `log` prints a line per cutback. A step that does not converge even after the
-    /// cutbacks raises SolverError (with `out`, the folder keeps what was computed, as the
-    /// command line's does). The run holds no Python lock; Ctrl-C takes effect when it returns
-    /// (stop a run from Python with steps()).
-    #[pyo3(signature = (out = None, progress = false, log = false))]
-    fn run(&self, py: Python<'_>, out: Option<PathBuf>, progress: bool, log: bool) -> PyResult<PyRunResult> {
+    /// files in that folder (solution.pvd and .vtu frames, contact CSVs, steps.csv,
+    /// summary.json, scenario.toml, as the scenario's `output` table asks); a folder holding
+    /// another run's results is refused (FileError) unless `overwrite`. Returns the states at
+    /// the output times, the state at T and the summary. `progress` draws the command line's
+    /// progress bar on stderr, `log` prints a line per cutback. A step that does not converge
+    /// even after the cutbacks raises SolverError (with `out`, the folder keeps what was
+    /// computed, as the command line's does). Ctrl-C stops the run after its current step (the
+    /// folder then says "interrupted") and raises KeyboardInterrupt. The Python lock is released
+    /// while it runs.
+    #[pyo3(signature = (out = None, progress = false, log = false, overwrite = false))]
+    fn run(
+        &self,
+        py: Python<'_>,
+        out: Option<PathBuf>,
+        progress: bool,
+        log: bool,
+        overwrite: bool,
+    ) -> PyResult<PyRunResult> {
         let problem = &*self.problem;
         let (params, plan) = (self.params(), self.plan());
+        let stop = StopFlag::new();
         let options = RunOptions {
             out_dir: out,
             progress,
             log,
+            overwrite,
+            stop: Some(stop.clone()),
+            ..RunOptions::default()
         };
-        let (run, captured) = py.detach(|| {
-            let mut captured: Vec<(State, StepInfo)> = Vec::with_capacity(plan.steps.len());
-            let run = driver::run_observed(problem, &params, &plan, &options, |_, state, info| {
-                if plan.steps.contains(&state.n) {
-                    captured.push((state.clone(), *info));
-                }
+        // The run goes on a thread of its own, so that this one can look for Ctrl-C (Python
+        // sees signals only on the main thread, between bytecodes) while it waits.
+        let (sender, receiver) = std::sync::mpsc::channel();
+        let receiver = Mutex::new(receiver);
+        let mut interrupted: Option<PyErr> = None;
+        let (run, captured) = std::thread::scope(|scope| {
+            scope.spawn(|| {
+                let mut captured: Vec<(State, StepInfo)> = Vec::with_capacity(plan.steps.len());
+                let run = driver::run_observed(problem, &params, &plan, &options, |_, state, info| {
+                    if plan.steps.contains(&state.n) {
+                        captured.push((state.clone(), *info));
+                    }
+                });
+                let _ = sender.send((run, captured));
             });
-            (run, captured)
+            loop {
+                let waited = py.detach(|| {
+                    let receiver = receiver.lock().expect("not poisoned");
+                    receiver.recv_timeout(Duration::from_millis(100))
+                });
+                match waited {
+                    Ok(done) => break done,
+                    Err(RecvTimeoutError::Timeout) => {
+                        if let Err(signal) = py.check_signals() {
+                            // The run stops after its current step and writes its files.
+                            stop.request(Interruption::Interrupt);
+                            interrupted.get_or_insert(signal);
+                        }
+                    }
+                    Err(RecvTimeoutError::Disconnected) => {
+                        unreachable!("the run's thread sends before it ends (a panic propagates from the scope)")
+                    }
+                }
+            }
         });
+        if let Some(signal) = interrupted {
+            return Err(signal);
+        }
         let mut run = run.map_err(|e| errors::to_py(py, &e))?;
         let summary = serde_json::to_string(&run.summary).expect("a summary serializes");
         let summary = py.import("json")?.call_method1("loads", (summary,))?;

@@ -10,8 +10,10 @@ import pytest
 import thermocontact as tc
 from conftest import COARSE, REPOSITORY, sets
 
-# The summary's entries that measure the machine, not the computation.
-MACHINE = {"timings", "peak_memory_mib"}
+# The summary's entries that measure the machine or name the run, not the computation.
+MACHINE = {"timings", "peak_memory_mib", "run_id"}
+# Files that hold such entries (compared apart) or the folder's lock.
+APART = {"summary.json", "steps.csv", ".thermocontact.lock"}
 
 
 def computed(summary):
@@ -35,8 +37,24 @@ def compare_with_cli(cli, tmp_path, scenario, cli_args):
     assert computed(py_summary) == computed(cli_summary)
     assert computed(result.summary) == computed(py_summary)
     for name in files(cli_dir):
-        if name != "summary.json":
+        if name not in APART:
             assert (py_dir / name).read_bytes() == (cli_dir / name).read_bytes(), name
+    # steps.csv: every column but the step's wall time; and the figures of each step handed
+    # out by steps() are the same.
+    steps = {}
+    for folder in (cli_dir, py_dir):
+        lines = (folder / "steps.csv").read_text().splitlines()
+        header = lines[0].split(",")
+        keep = [i for i, column in enumerate(header) if column != "seconds"]
+        steps[folder] = [[line.split(",")[i] for i in keep] for line in lines]
+    assert steps[py_dir] == steps[cli_dir]
+    columns = ["convexification", "inner", "newton", "descent_sweeps", "substeps", "cutback_depth"]
+    table = {row[0]: dict(zip(steps[cli_dir][0], row)) for row in steps[cli_dir][1:]}
+    for state in tc.Simulation(scenario).steps():
+        info = state.info
+        figures = [info.convexification_iterations, info.inner_iterations, info.newton_iterations,
+                   info.descent_sweeps, info.substeps, info.cutback_depth]
+        assert [int(table[str(state.n)][c]) for c in columns] == figures, state.n
 
     for state in result.outputs:
         csv = cli_dir / f"contact_{state.n:04d}.csv"

@@ -131,6 +131,31 @@ impl CscMatrix {
         self.values[k] += value;
     }
 
+    /// Splits the matrix into consecutive ranges of whole columns, the columns of nodes
+    /// `node_bounds[b] .. node_bounds[b + 1]` (`cols_per_node` columns per node), each writable
+    /// on its own thread.
+    pub fn split_columns_mut(&mut self, node_bounds: &[usize], cols_per_node: usize) -> Vec<ColumnsMut<'_>> {
+        let mut rest: &mut [f64] = &mut self.values;
+        let mut taken = self.col_ptr[node_bounds[0] * cols_per_node];
+        rest = &mut rest[taken..];
+        node_bounds
+            .windows(2)
+            .map(|bounds| {
+                let end = self.col_ptr[bounds[1] * cols_per_node];
+                let (values, tail) = std::mem::take(&mut rest).split_at_mut(end - taken);
+                rest = tail;
+                let offset = taken;
+                taken = end;
+                ColumnsMut {
+                    col_ptr: &self.col_ptr,
+                    row_idx: &self.row_idx,
+                    values,
+                    offset,
+                }
+            })
+            .collect()
+    }
+
     /// Entry (row, col), zero outside the pattern.
     pub fn get(&self, row: usize, col: usize) -> f64 {
         self.position(row, col).map_or(0.0, |k| self.values[k])
@@ -195,6 +220,28 @@ impl CscMatrix {
             self.row_idx.clone(),
         );
         SparseColMat::new(symbolic, self.values.clone())
+    }
+}
+
+/// A range of whole columns of a [`CscMatrix`] ([`CscMatrix::split_columns_mut`]).
+#[derive(Debug)]
+pub struct ColumnsMut<'a> {
+    col_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    values: &'a mut [f64],
+    /// Position in the matrix's `values` of `values[0]`.
+    offset: usize,
+}
+
+impl ColumnsMut<'_> {
+    /// Adds `value` at (row, col); col must be in the range and the entry in the pattern.
+    #[inline]
+    pub fn add(&mut self, row: usize, col: usize, value: f64) {
+        let (start, end) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        let k = self.row_idx[start..end]
+            .binary_search(&row)
+            .expect("entry outside the assembled pattern");
+        self.values[start + k - self.offset] += value;
     }
 }
 

@@ -102,7 +102,7 @@ impl Mesh {
                 return invalid(format!("node {p} of a 2D mesh is off the plane z = 0: {:?}", coords[p]));
             }
         }
-        if cells.is_empty() || cells.len() % (dim + 1) != 0 {
+        if cells.is_empty() || !cells.len().is_multiple_of(dim + 1) {
             return invalid(format!(
                 "{} cell node indices: expected a positive multiple of {}",
                 cells.len(),

@@ -189,7 +189,7 @@ mod tests {
         for f in 0..mesh.n_facets() {
             let part = mesh.facet_parts[f];
             let mut expected = [0.0; 3];
-            expected[part / 2] = if part % 2 == 0 { -1.0 } else { 1.0 };
+            expected[part / 2] = if part.is_multiple_of(2) { -1.0 } else { 1.0 };
             let n = mesh.facet_normal(f);
             assert!(
                 (0..3).all(|c| (n[c] - expected[c]).abs() < 1e-14),

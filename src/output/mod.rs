@@ -8,10 +8,12 @@
 use std::path::{Path, PathBuf};
 
 pub mod atomic;
+pub mod checkpoint;
 pub mod convergence_plot;
 pub mod csv;
 pub mod fields;
 pub mod figures;
+pub mod folder;
 pub mod plot;
 pub mod vtk;
 

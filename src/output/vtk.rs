@@ -35,7 +35,7 @@ pub struct Grid<'a> {
 }
 
 /// One time step of a `.pvd` collection.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PvdEntry {
     pub time: f64,
     /// Path of the data file, relative to the `.pvd` file.
@@ -150,7 +150,7 @@ fn check_grid(grid: &Grid) -> Result<usize, OutputError> {
         return Err(OutputError::Vtk(format!("dimension must be 2 or 3, got {}", grid.dim)));
     }
     let npc = grid.dim + 1;
-    if grid.cells.len() % npc != 0 {
+    if !grid.cells.len().is_multiple_of(npc) {
         return Err(OutputError::Vtk(format!(
             "connectivity length {} is not a multiple of {npc}",
             grid.cells.len()

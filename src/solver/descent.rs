@@ -100,7 +100,10 @@ impl ContactStiffness {
         });
         let inverse = d
             .llt(Side::Lower)
-            .map_err(|_| Error::Factorization("the contact compliance on Γ_C is not positive definite".into()))?
+            .map_err(|_| Error::Factorization {
+                stage: crate::error::FactorStage::ContactCompliance,
+                detail: "not positive definite".into(),
+            })?
             .inverse();
         let mut k = vec![0.0; n_t * n_t];
         for r in 0..n_t {

@@ -56,7 +56,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SymbolicSparseColMat;
 use faer::{Accum, Conj, Mat, MatMut, MatRef, Par, Side};
 
-use crate::error::Error;
+use crate::error::{Error, FactorStage};
 use crate::fem::sparse::CscMatrix;
 
 /// One supernode of the factor: columns `begin..end` (positions in the permuted order), whose
@@ -135,7 +135,10 @@ impl QuasiDefiniteLdlt {
                 ..Default::default()
             },
         )
-        .map_err(|e| Error::Factorization(format!("symbolic LDLᵀ: {e:?}")))?;
+        .map_err(|e| Error::Factorization {
+            stage: FactorStage::Symbolic,
+            detail: format!("{e:?}"),
+        })?;
         let mut values = vec![0.0; symbolic.len_val()];
         let par = Par::Seq;
         let mut mem = MemBuffer::new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()));
@@ -149,7 +152,10 @@ impl QuasiDefiniteLdlt {
                 MemStack::new(&mut mem),
                 Default::default(),
             )
-            .map_err(|e| Error::Factorization(format!("numeric LDLᵀ: {e:?}")))?;
+            .map_err(|e| Error::Factorization {
+                stage: FactorStage::Numeric,
+                detail: format!("{e:?}"),
+            })?;
 
         let mut nodes = Vec::new();
         let mut rows = Vec::new();
@@ -169,7 +175,10 @@ impl QuasiDefiniteLdlt {
             }
             SymbolicCholeskyRaw::Simplicial(_) if n == 0 => {}
             SymbolicCholeskyRaw::Simplicial(_) => {
-                return Err(Error::Factorization("expected a supernodal LDLᵀ".into()));
+                return Err(Error::Factorization {
+                    stage: FactorStage::Layout,
+                    detail: "simplicial, where the sweeps expect supernodes".into(),
+                });
             }
         }
         let mut inv_diag = vec![0.0; n];
@@ -491,7 +500,10 @@ fn constrained_amd(s: &CscMatrix, last: &[bool], tail: &[usize]) -> Result<Vec<u
         amd::Control::default(),
         MemStack::new(&mut mem),
     )
-    .map_err(|e| Error::Factorization(format!("AMD ordering: {e:?}")))?;
+    .map_err(|e| Error::Factorization {
+        stage: FactorStage::Ordering,
+        detail: format!("AMD: {e:?}"),
+    })?;
     Ok(perm.iter().map(|&k| rest[k]).chain(tail.iter().copied()).collect())
 }
 

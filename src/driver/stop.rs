@@ -1,0 +1,70 @@
+//! Stopping a run from outside: a flag that signal handlers (or a caller on another thread)
+//! set, and that the run reads after each step.
+//!
+//! The flag is a plain atomic integer, so a signal handler may set it (an allocation or a lock
+//! there is undefined behaviour). The run then finishes the step it is on, writes its files and
+//! returns [`Error::Interrupted`](crate::Error::Interrupted).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
+use crate::error::Interruption;
+
+/// A request to stop a run after the current step; clones share the flag.
+#[derive(Debug, Clone, Default)]
+pub struct StopFlag(Arc<AtomicUsize>);
+
+const CAUSES: [Interruption; 3] = [Interruption::Interrupt, Interruption::Terminate, Interruption::Caller];
+
+impl StopFlag {
+    /// A flag that nobody has set.
+    pub fn new() -> Self {
+        StopFlag::default()
+    }
+
+    /// Asks the run to stop, for `cause` (the first request wins).
+    pub fn request(&self, cause: Interruption) {
+        let _ = self
+            .0
+            .compare_exchange(0, Self::code(cause), Ordering::SeqCst, Ordering::SeqCst);
+    }
+
+    /// Why the run was asked to stop, if it was.
+    pub fn requested(&self) -> Option<Interruption> {
+        match self.0.load(Ordering::SeqCst) {
+            0 => None,
+            code => CAUSES.get(code - 1).copied(),
+        }
+    }
+
+    /// The flag's integer, for a signal handler: storing [`StopFlag::code`]`(cause)` in it is a
+    /// request (`signal_hook::flag::register_usize`).
+    pub fn atomic(&self) -> Arc<AtomicUsize> {
+        Arc::clone(&self.0)
+    }
+
+    /// The value that stands for `cause` in [`StopFlag::atomic`].
+    pub fn code(cause: Interruption) -> usize {
+        CAUSES.iter().position(|&c| c == cause).expect("every cause is listed") + 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_request_wins_and_codes_round_trip() {
+        let flag = StopFlag::new();
+        assert_eq!(flag.requested(), None);
+        for cause in CAUSES {
+            let f = StopFlag::new();
+            f.atomic().store(StopFlag::code(cause), Ordering::SeqCst);
+            assert_eq!(f.requested(), Some(cause));
+        }
+        let shared = flag.clone();
+        shared.request(Interruption::Terminate);
+        flag.request(Interruption::Interrupt);
+        assert_eq!(flag.requested(), Some(Interruption::Terminate));
+    }
+}

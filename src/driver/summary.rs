@@ -1,0 +1,303 @@
+//! What a run reports: `summary.json` ([`Summary`]), the figures of each output time and of
+//! each step, and the tally a run accumulates step by step (kept in checkpoints, so that a
+//! continued run reports the whole run).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::Error;
+use crate::output::PvdEntry;
+use crate::solver::system::State;
+use crate::solver::{StepFailure, StepInfo};
+use crate::time::ContactRow;
+
+/// Wall time per phase, in seconds.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Timings {
+    /// Mesh, spaces, matrices and loads.
+    pub assembly: f64,
+    /// Reduced step matrix and its sparse LU.
+    pub factorization: f64,
+    /// Solver set-up (condensation onto Γ_C).
+    pub solver_setup: f64,
+    /// The time loop without output.
+    pub time_stepping: f64,
+    /// Of which: sparse solves with the factored step matrix (in the loop).
+    pub linear_solves: f64,
+    /// Of which: building right-hand sides.
+    pub right_hand_sides: f64,
+    /// Of which: setting up the cutback levels k/2, k/4, … (factorization and condensation)
+    /// when a cutback first needs them.
+    pub cutback_setup: f64,
+    /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest).
+    pub contact_solver: f64,
+    /// Writing files.
+    pub output: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// The contact state at one output time.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct OutputRecord {
+    /// Time level n.
+    pub n: usize,
+    /// t_n.
+    pub t: f64,
+    /// Contact nodes with |w_τ| > slip tolerance.
+    pub slip_nodes: usize,
+    /// The other contact nodes.
+    pub stick_nodes: usize,
+    /// Largest |w_τ| on Γ_C.
+    pub max_slip_rate: f64,
+    /// Temperature range over Ω.
+    pub min_temperature: f64,
+    pub max_temperature: f64,
+    /// Largest |u| over Ω.
+    pub max_displacement: f64,
+    /// ‖u_n‖_E.
+    pub energy_norm_u: f64,
+    /// Contact rows (not serialized; in the CSV files).
+    #[serde(skip)]
+    pub contact: Vec<ContactRow>,
+}
+
+/// Everything `summary.json` holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub dim: usize,
+    pub nodes: usize,
+    pub elements: usize,
+    pub velocity_unknowns: usize,
+    pub temperature_unknowns: usize,
+    pub unknowns: usize,
+    pub contact_nodes: usize,
+    pub steps: usize,
+    pub time_step: f64,
+    pub solver: String,
+    pub slip_tolerance: f64,
+    pub convexification_iterations: usize,
+    pub inner_iterations: usize,
+    pub max_convexification_per_step: usize,
+    /// Semismooth Newton iterations (fast solver).
+    pub newton_iterations: usize,
+    /// Steps the fast solver took through the convexification loop (law too steep for Newton).
+    pub fallback_steps: usize,
+    /// Steps (or substeps) the fast solver finished by descent on the step's energy (the
+    /// convexification loop failed there).
+    pub descent_steps: usize,
+    /// Descent sweeps over all steps.
+    pub descent_sweeps: usize,
+    /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
+    /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
+    pub linear_solves: usize,
+    /// Triangular sweeps over all of the factor in the time loop (forward or backward; a full
+    /// solve counts two).
+    pub full_sweeps: usize,
+    /// Stored entries of the LDLᵀ factor of the step matrix.
+    pub factor_nnz: usize,
+    /// Peak resident memory of the process at the end of the run (Linux), MiB.
+    pub peak_memory_mib: Option<f64>,
+    /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
+    /// stick, ξ_i = −μ(|w_i|)S w_i/|w_i| at slip) over every completed step and Γ_C node,
+    /// relative to μ(0)S: how well the returned states solve the discrete problem.
+    pub max_law_residual: f64,
+    /// Steps cut back into substeps (a step that converged at k is not listed).
+    pub cutbacks: Vec<CutbackRecord>,
+    /// `running`, `completed`, or `failed` / `interrupted` with [`Summary::failure`].
+    pub status: RunStatus,
+    /// This run's identifier: `summary.json`, `solution.pvd`, the frames and the checkpoint of
+    /// a folder belong to it (a continued run keeps it).
+    pub run_id: String,
+    /// The scenario's fingerprint (SHA-256 of everything in it that changes the solution).
+    pub scenario_fingerprint: Option<String>,
+    /// Time levels from which the run was continued (`run --restart`), in order.
+    pub restarts: Vec<usize>,
+    /// Why the run stopped, when it did.
+    pub failure: Option<FailureRecord>,
+    pub timings: Timings,
+    pub outputs: Vec<OutputRecord>,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// Still running (what `summary.json` says until the run ends; a run killed outright
+    /// leaves it so).
+    Running,
+    Completed,
+    Failed,
+    /// Stopped from outside between two steps (SIGINT, SIGTERM, or the caller).
+    Interrupted,
+}
+
+impl RunStatus {
+    /// How a run that ended with `failure` (none: it completed) ended.
+    pub fn of(failure: Option<&Error>) -> Self {
+        match failure {
+            None => RunStatus::Completed,
+            Some(Error::Interrupted { .. }) => RunStatus::Interrupted,
+            Some(_) => RunStatus::Failed,
+        }
+    }
+}
+
+/// A step that went through substeps.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CutbackRecord {
+    /// Time level n of the step and t_n.
+    pub step: usize,
+    pub t: f64,
+    /// The deepest cutback: the shortest substep was k/2^depth.
+    pub depth: usize,
+    /// Substeps taken.
+    pub substeps: usize,
+}
+
+/// Why a run stopped.
+#[derive(Debug, Clone, Serialize)]
+pub struct FailureRecord {
+    /// The error as the command prints it.
+    pub message: String,
+    /// Who stopped the run, when it was interrupted.
+    pub interrupted: Option<crate::error::Interruption>,
+    /// The step being computed, its target time and the deepest cutback tried (solver
+    /// failures only).
+    pub step: Option<usize>,
+    pub time: Option<f64>,
+    pub cutback_depth: Option<usize>,
+    /// The loop and the criterion that failed, with its value and tolerance.
+    pub solver: Option<StepFailure>,
+    /// The last completed time level and its time (0: the initial state).
+    pub last_step: usize,
+    pub last_time: f64,
+}
+
+impl FailureRecord {
+    pub fn new(error: &Error, last: &State) -> Self {
+        let (step, time, cutback_depth, solver) = match error {
+            Error::NotConverged {
+                step,
+                time,
+                cutback_depth,
+                failure,
+            } => (Some(*step), Some(*time), Some(*cutback_depth), Some(*failure)),
+            _ => (None, None, None, None),
+        };
+        FailureRecord {
+            message: error.to_string(),
+            interrupted: match error {
+                Error::Interrupted { cause, .. } => Some(*cause),
+                _ => None,
+            },
+            step,
+            time,
+            cutback_depth,
+            solver,
+            last_step: last.n,
+            last_time: last.t,
+        }
+    }
+}
+
+/// The solver's figures of one time step (a line of `steps.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    pub n: usize,
+    pub t: f64,
+    pub convexification_iterations: usize,
+    pub inner_iterations: usize,
+    pub newton_iterations: usize,
+    pub descent_sweeps: usize,
+    /// Substeps taken (1: no cutback) and the deepest cutback.
+    pub substeps: usize,
+    pub cutback_depth: usize,
+    /// The step's nodal friction-law residual, relative to μ(0)S.
+    pub law_residual: f64,
+    /// Wall time of the step, s.
+    pub seconds: f64,
+}
+
+impl StepRecord {
+    /// The columns of `steps.csv`.
+    pub const HEADER: [&'static str; 10] = [
+        "n",
+        "t",
+        "convexification",
+        "inner",
+        "newton",
+        "descent_sweeps",
+        "substeps",
+        "cutback_depth",
+        "law_residual",
+        "seconds",
+    ];
+
+    /// The record as a `steps.csv` row.
+    pub fn row(&self) -> Vec<f64> {
+        vec![
+            self.n as f64,
+            self.t,
+            self.convexification_iterations as f64,
+            self.inner_iterations as f64,
+            self.newton_iterations as f64,
+            self.descent_sweeps as f64,
+            self.substeps as f64,
+            self.cutback_depth as f64,
+            self.law_residual,
+            self.seconds,
+        ]
+    }
+}
+
+/// What a run accumulates step by step; a checkpoint keeps it, so that a continued run
+/// reports the whole run.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Tally {
+    pub run_id: String,
+    pub restarts: Vec<usize>,
+    pub convexification_iterations: usize,
+    pub inner_iterations: usize,
+    pub max_convexification_per_step: usize,
+    pub newton_iterations: usize,
+    pub fallback_steps: usize,
+    pub descent_steps: usize,
+    pub descent_sweeps: usize,
+    pub max_law_residual: f64,
+    pub cutbacks: Vec<CutbackRecord>,
+    pub outputs: Vec<OutputRecord>,
+    /// The frames written, as `solution.pvd` lists them.
+    pub frames: Vec<PvdEntry>,
+    pub steps: Vec<StepRecord>,
+}
+
+impl Tally {
+    /// A new run's tally.
+    pub fn new() -> Self {
+        Tally {
+            run_id: new_run_id(),
+            ..Tally::default()
+        }
+    }
+
+    /// Counts a completed step.
+    pub fn add_step(&mut self, info: &StepInfo, record: StepRecord) {
+        self.convexification_iterations += info.convexification_iterations;
+        self.inner_iterations += info.inner_iterations;
+        self.max_convexification_per_step = self.max_convexification_per_step.max(info.convexification_iterations);
+        self.newton_iterations += info.newton_iterations;
+        self.fallback_steps += usize::from(info.fallback);
+        self.descent_steps += usize::from(info.descent_sweeps > 0);
+        self.descent_sweeps += info.descent_sweeps;
+        self.max_law_residual = self.max_law_residual.max(record.law_residual);
+        self.steps.push(record);
+    }
+}
+
+/// A run identifier: the start time (ns since the epoch) and the process id, in hex.
+fn new_run_id() -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    format!("{nanos:x}-{:x}", std::process::id())
+}

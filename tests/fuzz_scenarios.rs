@@ -1,0 +1,276 @@
+//! Input that cannot crash it: a seeded generator of mutated scenarios. Every case must end in a
+//! clean error naming a key, or in a run whose figures are finite; never a panic.
+//!
+//! 300 cases here (seconds); for a deeper run,
+//! `THERMOCONTACT_FUZZ_CASES=100000 cargo test --release --test fuzz_scenarios`
+//! (`THERMOCONTACT_FUZZ_SEED` picks another sequence).
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use thermocontact::Scenario;
+use toml::{Table, Value};
+
+const PAPER_3D: &str = include_str!("../scenarios/paper3d.toml");
+
+/// SplitMix64: a tiny, well-mixed and reproducible sequence (no dependency for a test).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+
+    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
+        &items[self.below(items.len())]
+    }
+}
+
+/// Values a user (or an attacker) might type.
+fn value(rng: &mut Rng) -> Value {
+    let floats = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e300,
+        -1e300,
+        1e-300,
+        0.0,
+        -0.0,
+        -1.0,
+        0.5,
+        1.0,
+        3.0,
+        1e19,
+        1e6,
+        -7.5,
+    ];
+    let ints = [i64::MAX, i64::MIN, 0, -1, 1, 2, 3, 7, 100, 100_000, 1 << 40];
+    let strings = [
+        "",
+        "x",
+        "nan",
+        "1e309",
+        "sin(x)/0",
+        "x*y*z*t",
+        "exp(1000*t)",
+        "paper",
+        "tresca",
+        "bottom",
+        "no-such-part",
+        "((((",
+        "1e-3*x",
+    ];
+    match rng.below(7) {
+        0 | 1 => Value::Float(*rng.pick(&floats)),
+        2 => Value::Integer(*rng.pick(&ints)),
+        3 => Value::String(rng.pick(&strings).to_string()),
+        4 => Value::Boolean(rng.below(2) == 0),
+        5 => {
+            let n = rng.pick(&[0usize, 1, 2, 3, 4]);
+            Value::Array((0..*n).map(|_| Value::Float(*rng.pick(&floats))).collect())
+        }
+        _ => Value::Table(Table::from_iter([("law".to_string(), Value::String("tresca".into()))])),
+    }
+}
+
+/// Every leaf path of a table (array elements by index).
+fn leaves(value: &Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match value {
+        Value::Table(t) => {
+            for (k, v) in t {
+                path.push(k.clone());
+                leaves(v, path, out);
+                path.pop();
+            }
+        }
+        Value::Array(a) if a.iter().any(|v| v.is_table()) => {
+            for (i, v) in a.iter().enumerate() {
+                path.push(format!("#{i}"));
+                leaves(v, path, out);
+                path.pop();
+            }
+        }
+        _ => out.push(path.clone()),
+    }
+}
+
+fn slot<'a>(root: &'a mut Value, path: &[String]) -> &'a mut Value {
+    path.iter().fold(root, |v, key| match (v, key.strip_prefix('#')) {
+        (Value::Array(a), Some(i)) => &mut a[i.parse::<usize>().unwrap()],
+        (Value::Table(t), _) => t.get_mut(key).unwrap(),
+        _ => unreachable!("paths come from leaves()"),
+    })
+}
+
+fn mutate(rng: &mut Rng, root: &mut Value) {
+    let mut all = Vec::new();
+    leaves(root, &mut Vec::new(), &mut all);
+    let path = rng.pick(&all).clone();
+    match rng.below(10) {
+        // Remove the key.
+        0 => {
+            if let (Some((last, parents)), false) = (path.split_last(), path.last().unwrap().starts_with('#')) {
+                if let Value::Table(t) = slot(root, parents) {
+                    t.remove(last);
+                }
+            }
+        }
+        // Add a key nobody knows.
+        1 => {
+            if let Some((_, parents)) = path.split_last() {
+                if let Value::Table(t) = slot(root, parents) {
+                    t.insert("surprise".into(), value(rng));
+                }
+            }
+        }
+        // Same type, an extreme or odd value: what gets past the parser.
+        2..=6 => {
+            let target = slot(root, &path);
+            let new = value(rng);
+            let same = matches!(
+                (&*target, &new),
+                (Value::Float(_), Value::Float(_) | Value::Integer(_))
+                    | (Value::Integer(_), Value::Integer(_))
+                    | (Value::String(_), Value::String(_))
+                    | (Value::Boolean(_), Value::Boolean(_))
+                    | (Value::Array(_), Value::Array(_))
+            );
+            if same {
+                *target = new;
+            } else if let Value::Array(items) = target {
+                if let Some(item) = items.first_mut() {
+                    *item = Value::Float(*rng.pick(&[f64::NAN, 1e300, -1.0, 0.0, 1e-300, 2.0]));
+                }
+            } else if let Value::Float(x) = target {
+                *x = *rng.pick(&[f64::NAN, f64::INFINITY, 1e300, -1e300, 1e-300, 0.0, -1.0, 1e17, 2.0]);
+            } else if let Value::Integer(i) = target {
+                *i = *rng.pick(&[0, -1, 1, 3, 1 << 20, i64::MAX]);
+            }
+        }
+        _ => *slot(root, &path) = value(rng),
+    }
+}
+
+/// Cases small enough to run (the others are validated only).
+fn small(s: &Scenario) -> bool {
+    let cells: usize = s
+        .structured()
+        .map_or(usize::MAX, |m| m.cells.iter().fold(1usize, |p, &n| p.saturating_mul(n)));
+    cells <= 2048 && s.time.steps <= 32
+}
+
+/// How a case ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Outcome {
+    Refused,
+    TooLargeToRun,
+    Failed,
+    Ran,
+}
+
+fn case(seed: u64) -> Result<Outcome, String> {
+    let mut rng = Rng(seed);
+    // The complete 2D default or the 3D example, small to start with (the mutations may make
+    // it large).
+    let three_d = rng.below(4) == 0;
+    let scenario = if three_d {
+        Scenario::load(
+            Some(PAPER_3D),
+            &["mesh.nx=4", "mesh.ny=1", "mesh.nz=1", "time.steps=4"].map(String::from),
+        )
+    } else {
+        Scenario::load(None, &["mesh.nx=8", "mesh.ny=2", "time.steps=4"].map(String::from))
+    };
+    let base: Table = scenario.unwrap().to_toml().parse().unwrap();
+    let mut root = Value::Table(base);
+    for _ in 0..=rng.below(3) {
+        mutate(&mut rng, &mut root);
+    }
+    let text = toml::to_string(&root).map_err(|e| format!("the generator made no TOML: {e}"))?;
+    let outcome = catch_unwind(AssertUnwindSafe(|| -> Result<Outcome, String> {
+        let scenario = match Scenario::load(Some(&text), &[]) {
+            Ok(s) => s,
+            Err(e) if !e.to_string().is_empty() => {
+                if std::env::var("FUZZ_DEBUG").is_ok() {
+                    eprintln!("{e}");
+                }
+                return Ok(Outcome::Refused);
+            }
+            Err(_) => return Err("an empty error message".into()),
+        };
+        if !small(&scenario) {
+            return Ok(Outcome::TooLargeToRun);
+        }
+        match scenario.run_quiet() {
+            Err(e) if e.to_string().is_empty() => Err("an empty error message".into()),
+            Err(_) => Ok(Outcome::Failed),
+            Ok((summary, state)) => {
+                let finite = state
+                    .u
+                    .iter()
+                    .chain(&state.w)
+                    .chain(&state.theta)
+                    .all(|v| v.is_finite());
+                if finite && summary.max_law_residual.is_finite() {
+                    Ok(Outcome::Ran)
+                } else {
+                    Err("a run that completed with non-finite fields".into())
+                }
+            }
+        }
+    }));
+    match outcome {
+        Ok(Ok(outcome)) => Ok(outcome),
+        Ok(Err(why)) => Err(format!("seed {seed}: {why}\n{text}")),
+        Err(panic) => {
+            let message = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            Err(format!("seed {seed}: panicked: {message}\n{text}"))
+        }
+    }
+}
+
+#[test]
+fn mutated_scenarios_end_in_a_clean_error_or_a_finite_run() {
+    let cases: u64 = std::env::var("THERMOCONTACT_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(300);
+    let first: u64 = std::env::var("THERMOCONTACT_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    // Panics are caught and reported with their case; keep the default hook quiet meanwhile.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let results: Vec<Result<Outcome, String>> = (first..first + cases).map(case).collect();
+    std::panic::set_hook(hook);
+    let count = |o: Outcome| results.iter().filter(|r| r.as_ref().ok() == Some(&o)).count();
+    let (refused, large, failed, ran) = (
+        count(Outcome::Refused),
+        count(Outcome::TooLargeToRun),
+        count(Outcome::Failed),
+        count(Outcome::Ran),
+    );
+    eprintln!("{cases} cases: {refused} refused, {large} valid but too large to run here, {failed} stopped with an error, {ran} ran");
+    // Not a vacuous test: a good share of the mutants pass validation and run.
+    assert!(ran * 10 >= cases as usize, "only {ran} of {cases} cases ran");
+    let failures: Vec<&String> = results.iter().filter_map(|r| r.as_ref().err()).collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {cases} cases failed; the first:\n{}",
+        failures.len(),
+        failures[0]
+    );
+}

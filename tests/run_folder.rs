@@ -1,0 +1,335 @@
+//! Runs a user can trust: a folder owned by one run, a run stopped from outside that keeps what
+//! it computed, and a continued run that gives the bits of the uninterrupted one.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::coarse;
+use thermocontact::driver::{self, OutputPlan, Restart, RunOptions, RunStatus, StopFlag, CHECKPOINT_FILE};
+use thermocontact::{Error, Interruption, Scenario};
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermocontact-folder-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn options(dir: &Path) -> RunOptions {
+    RunOptions {
+        out_dir: Some(dir.to_path_buf()),
+        ..RunOptions::default()
+    }
+}
+
+/// The frames a `.pvd` lists.
+fn pvd_files(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("solution.pvd")).unwrap();
+    text.split("file=\"")
+        .skip(1)
+        .map(|rest| rest.split('"').next().unwrap().to_string())
+        .collect()
+}
+
+fn vtu_files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".vtu"))
+        .collect();
+    names.sort();
+    names
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn same_bytes(a: &Path, b: &Path, names: &[String]) {
+    for name in names {
+        let (x, y) = (
+            std::fs::read(a.join(name)).unwrap(),
+            std::fs::read(b.join(name)).unwrap(),
+        );
+        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
+    }
+}
+
+/// Output every second step of the coarse example, so that frames fall before and after a stop.
+fn scenario() -> Scenario {
+    coarse(&["output.times=[0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0]"])
+}
+
+#[test]
+fn a_folder_with_another_runs_results_is_refused_unless_overwritten() {
+    let dir = scratch("refuse");
+    let scenario = coarse(&["time.steps=4", "output.times=[0.5, 1.0]"]);
+    let problem = scenario.build().unwrap();
+    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let first = driver::run(&problem, &params, &plan, &options(&dir)).unwrap();
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+
+    let error = driver::run(&problem, &params, &plan, &options(&dir)).unwrap_err();
+    assert!(matches!(error, Error::Folder(_)), "{error}");
+    assert!(error.to_string().contains("--overwrite"), "{error}");
+    assert_eq!(
+        summary(&dir)["run_id"],
+        first.run_id.as_str(),
+        "the refused run touched nothing"
+    );
+
+    // A shorter run with --overwrite leaves none of the first run's frames.
+    let short = coarse(&["time.steps=2", "output.times=[1.0]"]);
+    let short_problem = short.build().unwrap();
+    let overwrite = RunOptions {
+        overwrite: true,
+        ..options(&dir)
+    };
+    let second = driver::run(&short_problem, &short.solver_params(), &short.output_plan(), &overwrite).unwrap();
+    assert_ne!(second.run_id, first.run_id);
+    assert_eq!(summary(&dir)["run_id"], second.run_id.as_str());
+    assert_eq!(vtu_files(&dir), vec!["solution_0002.vtu".to_string()]);
+    assert_eq!(pvd_files(&dir), vtu_files(&dir));
+    assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "mine");
+    let steps = std::fs::read_to_string(dir.join("steps.csv")).unwrap();
+    assert_eq!(steps.lines().count(), 3, "a header and a line per step:\n{steps}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted_run() {
+    let scenario = scenario();
+    let problem = scenario.build().unwrap();
+    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+
+    let whole = scratch("whole");
+    let reference = driver::run(&problem, &params, &plan, &options(&whole)).unwrap();
+    assert_eq!(reference.status, RunStatus::Completed);
+    assert!(!whole.join(CHECKPOINT_FILE).exists());
+
+    // Stopped after step 5, as SIGTERM does (the flag set while step 5 runs).
+    let dir = scratch("stopped");
+    let stop = StopFlag::new();
+    let stopping = RunOptions {
+        stop: Some(stop.clone()),
+        ..options(&dir)
+    };
+    let error = driver::run_observed(&problem, &params, &plan, &stopping, |_, state, _| {
+        if state.n == 5 {
+            stop.request(Interruption::Terminate);
+        }
+    })
+    .err()
+    .unwrap();
+    assert!(
+        matches!(
+            error,
+            Error::Interrupted {
+                step: 5,
+                cause: Interruption::Terminate,
+                ..
+            }
+        ),
+        "{error}"
+    );
+    let stopped = summary(&dir);
+    assert_eq!(stopped["status"], "interrupted");
+    assert_eq!(stopped["failure"]["interrupted"], "terminate");
+    assert_eq!(stopped["failure"]["last_step"], 5);
+    // The frames of steps 2 and 4, and the last state (5): all listed, all present.
+    assert_eq!(
+        vtu_files(&dir),
+        ["solution_0002.vtu", "solution_0004.vtu", "solution_0005.vtu"].map(String::from)
+    );
+    assert_eq!(pvd_files(&dir), vtu_files(&dir));
+    same_bytes(&whole, &dir, &["solution_0002.vtu".into(), "solution_0004.vtu".into()]);
+    let temporary: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(temporary.is_empty(), "{temporary:?}");
+
+    // Continued from the checkpoint of step 5: every frame and the final fields bit for bit.
+    let restart = Restart::read(&dir.join(CHECKPOINT_FILE)).unwrap();
+    assert_eq!(restart.checkpoint.state.n, 5);
+    let continuing = RunOptions {
+        restart: Some(restart),
+        ..options(&dir)
+    };
+    let continued = driver::run(&problem, &params, &plan, &continuing).unwrap();
+    assert_eq!(continued.status, RunStatus::Completed);
+    assert_eq!(continued.restarts, vec![5]);
+    assert_eq!(continued.run_id, summary(&dir)["run_id"].as_str().unwrap());
+    let frames: Vec<String> = (1..=8).map(|i| format!("solution_{:04}.vtu", 2 * i)).collect();
+    assert_eq!(vtu_files(&dir), frames, "the stop's own frame of step 5 is gone");
+    assert_eq!(pvd_files(&dir), frames);
+    same_bytes(&whole, &dir, &frames);
+    let csvs: Vec<String> = (1..=8).map(|i| format!("contact_{:04}.csv", 2 * i)).collect();
+    same_bytes(&whole, &dir, &csvs);
+    // The whole run's figures, not the continued part's.
+    assert_eq!(
+        continued.convexification_iterations,
+        reference.convexification_iterations
+    );
+    assert_eq!(continued.outputs.len(), reference.outputs.len());
+    let lines = |d: &Path| std::fs::read_to_string(d.join("steps.csv")).unwrap().lines().count();
+    assert_eq!(lines(&dir), lines(&whole));
+    assert_eq!(lines(&dir), 17);
+
+    // A checkpoint of another problem is refused, naming what differs.
+    let other = coarse(&["material.density=50"]);
+    let other_problem = other.build().unwrap();
+    let stopped_again = scratch("other");
+    std::fs::create_dir_all(&stopped_again).unwrap();
+    let error = driver::run(
+        &other_problem,
+        &other.solver_params(),
+        &other.output_plan(),
+        &RunOptions {
+            restart: Some(Restart::read(&whole_checkpoint(&problem, &plan, &stopped_again)).unwrap()),
+            ..options(&stopped_again)
+        },
+    )
+    .unwrap_err();
+    assert!(error.to_string().contains("another scenario"), "{error}");
+    for d in [whole, dir, stopped_again] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// A checkpoint of `problem` at step 3, written into `dir` by a run stopped there.
+fn whole_checkpoint(problem: &thermocontact::Problem, plan: &OutputPlan, dir: &Path) -> PathBuf {
+    let stop = StopFlag::new();
+    let scratch_dir = dir.join("first");
+    let params = scenario().solver_params();
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        ..options(&scratch_dir)
+    };
+    let _ = driver::run_observed(problem, &params, plan, &options, |_, state, _| {
+        if state.n == 3 {
+            stop.request(Interruption::Caller);
+        }
+    });
+    scratch_dir.join(CHECKPOINT_FILE)
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+}
+
+/// Waits until `path` exists (a process writes it), at most a minute.
+fn wait_for(path: &Path) {
+    let start = Instant::now();
+    while !path.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// The CLI under signals: SIGTERM stops after the step with exit code 143 and a complete
+/// folder; SIGKILL after a periodic checkpoint loses only the steps since, and `--restart`
+/// continues either to the bits of the uninterrupted run.
+#[test]
+fn the_cli_stops_on_sigterm_survives_sigkill_and_restarts() {
+    let args = [
+        "--set",
+        "mesh.nx=8",
+        "--set",
+        "mesh.ny=2",
+        "--set",
+        "time.steps=3000",
+        "--set",
+        "output.times=[0.5, 1.0]",
+        "--set",
+        "output.checkpoint_every=200",
+    ];
+    let whole = scratch("cli-whole");
+    let status = bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&whole)
+        .args(args)
+        .stdout(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success());
+
+    for (signal, code) in [("-TERM", Some(143)), ("-KILL", None)] {
+        let dir = scratch(&format!("cli{signal}"));
+        let mut child = bin()
+            .args(["run", "--quiet", "--out"])
+            .arg(&dir)
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        // After the first periodic checkpoint, and long before the end.
+        wait_for(&dir.join(CHECKPOINT_FILE));
+        let killed = Command::new("kill")
+            .arg(signal)
+            .arg(child.id().to_string())
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), code, "{signal}: {status:?}");
+        let stopped = summary(&dir);
+        match code {
+            Some(_) => {
+                assert_eq!(stopped["status"], "interrupted");
+                assert_eq!(pvd_files(&dir), vtu_files(&dir));
+            }
+            // Killed outright: the summary still says running, the checkpoint is whole.
+            None => assert_eq!(stopped["status"], "running"),
+        }
+        let restarted = bin().args(["run", "--quiet", "--restart"]).arg(&dir).output().unwrap();
+        assert!(
+            restarted.status.success(),
+            "{}",
+            String::from_utf8_lossy(&restarted.stderr)
+        );
+        assert_eq!(summary(&dir)["status"], "completed");
+        let frames = vec!["solution_1500.vtu".to_string(), "solution_3000.vtu".to_string()];
+        assert_eq!(vtu_files(&dir), frames);
+        same_bytes(&whole, &dir, &frames);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    std::fs::remove_dir_all(&whole).unwrap();
+}
+
+/// `initial.from`: a checkpoint's fields become the initial data of another run on the same
+/// mesh; a checkpoint of another mesh is refused, naming the key.
+#[test]
+fn initial_fields_come_from_a_checkpoint_of_the_same_mesh() {
+    let dir = scratch("initial-from");
+    let scenario = scenario();
+    let problem = scenario.build().unwrap();
+    let checkpoint = whole_checkpoint(&problem, &scenario.output_plan(), &dir);
+    let state = Restart::read(&checkpoint).unwrap().checkpoint.state;
+    assert_eq!(state.n, 3);
+    assert!(state.u.iter().any(|&u| u != 0.0));
+
+    let from = format!("initial.from={:?}", checkpoint.display().to_string());
+    let next = coarse(&[from.as_str(), "material.density=50"]).build().unwrap();
+    let close = |a: &[f64], b: &[f64]| {
+        let scale = b.iter().fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()));
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+    };
+    assert!(close(&next.initial.displacement, &state.u));
+    assert!(close(&next.initial.velocity, &state.w));
+    assert_eq!(next.initial.temperature, state.theta);
+
+    let other_mesh = coarse(&[from.as_str(), "mesh.nx=12"]).build().unwrap_err().to_string();
+    assert!(
+        other_mesh.contains("initial.from") && other_mesh.contains("mesh"),
+        "{other_mesh}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
