@@ -21,8 +21,11 @@ def test_keys_by_dotted_path_read_and_write_the_toml(coarse):
     coarse["mesh.ny"] = np.int64(2)
     assert coarse["material.thermal_expansion"] == 1e-4 and coarse["mesh.ny"] == 2
     assert coarse.output_steps == [8, 16]
-    coarse["friction"] = {"law": "tresca", "bound": 100}  # a law's table is set whole
+    coarse["friction"] = {"law": "tresca", "bound": 100}  # a law's table set whole
     assert coarse["friction"] == {"law": "tresca", "bound": 100.0}
+    coarse.update({"friction.law": "slip-weakening", "friction.bound": 150, "friction.a": 1.0,
+                   "friction.b": 0.2, "friction.alpha": 100.0})  # or key by key, at once
+    assert coarse["friction.law"] == "slip-weakening"
     assert "loads.traction" in coarse and coarse["loads.traction.0.part"] == "top"
     with pytest.raises(KeyError):
         coarse["mesh.nothing"]
