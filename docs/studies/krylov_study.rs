@@ -21,7 +21,8 @@
 //! Candidates, every one from x₀ = 0 to ‖b − A x‖ ≤ tol ‖b‖ (the unpreconditioned, true
 //! residual; right preconditioning for GMRES and BiCGStab):
 //!
-//! * hand-written on CSR (this file): GMRES(30) and BiCGStab with Jacobi, ILU(0) of A, and the
+//! * hand-written on CSR (this file): GMRES(30) and BiCGStab with Jacobi, ILU(0) of A (stored
+//!   interleaved in A's rows, `ilu`, or split into L and U with 32-bit indices, `ilu-split`), the
 //!   block-diagonal ILU(0) (ILU(0) of K_w and of K_θ, coupling dropped); CG with Jacobi and IC(0)
 //!   (= ILU(0) of the symmetric K_w) on the velocity block K_w alone;
 //! * `kryst` 4.3 (pure Rust): its GMRES + ILU(0) on A through `KspContext`; its smoothed-
@@ -29,6 +30,8 @@
 //!   preconditioner of our CG, and as the velocity block of a block-diagonal preconditioner of A;
 //! * PETSc: `--export DIR` writes A, K_w (padded to 3 unknowns per node), the right-hand sides and
 //!   the rigid-body modes in PETSc's binary format for `krylov_petsc.c` (beside this file).
+//!
+//! `micro` times the kernels alone (products with A, ILU(0) sweeps in both layouts).
 //!
 //! Times are wall-clock seconds; a solve is repeated `--reps` times (default 5) and min / median
 //! are printed. The machine is shared: run with `RAYON_NUM_THREADS=1` (PETSc runs serial).
@@ -199,6 +202,101 @@ impl Pc for Ilu0 {
     }
 }
 
+/// The same ILU(0) factor stored for its sweeps: L and U in separate arrays (each sweep streams
+/// only its half), 32-bit column indices, the inverse of U's diagonal.
+struct Ilu0Split {
+    l_ptr: Vec<usize>,
+    l_col: Vec<u32>,
+    l_val: Vec<f64>,
+    u_ptr: Vec<usize>,
+    u_col: Vec<u32>,
+    u_val: Vec<f64>,
+    inv_diag: Vec<f64>,
+}
+
+impl Ilu0Split {
+    fn new(a: &Csr) -> Ilu0Split {
+        let f = Ilu0::new(a);
+        let lu = &f.lu;
+        let n = lu.n;
+        let mut s = Ilu0Split {
+            l_ptr: vec![0],
+            l_col: Vec::new(),
+            l_val: Vec::new(),
+            u_ptr: vec![0],
+            u_col: Vec::new(),
+            u_val: Vec::new(),
+            inv_diag: Vec::with_capacity(n),
+        };
+        for i in 0..n {
+            for p in lu.ptr[i]..f.diag[i] {
+                s.l_col.push(lu.col[p] as u32);
+                s.l_val.push(lu.val[p]);
+            }
+            s.l_ptr.push(s.l_col.len());
+            for p in f.diag[i] + 1..lu.ptr[i + 1] {
+                s.u_col.push(lu.col[p] as u32);
+                s.u_val.push(lu.val[p]);
+            }
+            s.u_ptr.push(s.u_col.len());
+            s.inv_diag.push(1.0 / lu.val[f.diag[i]]);
+        }
+        s
+    }
+}
+
+#[inline]
+fn sparse_dot32(cols: &[u32], vals: &[f64], x: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
+    let (cr, vr) = (c4.remainder(), v4.remainder());
+    for (c, v) in c4.zip(v4) {
+        for k in 0..4 {
+            acc[k] += v[k] * x[c[k] as usize];
+        }
+    }
+    let tail: f64 = cr.iter().zip(vr).map(|(&c, v)| v * x[c as usize]).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+impl Pc for Ilu0Split {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let n = self.inv_diag.len();
+        for i in 0..n {
+            let (s, e) = (self.l_ptr[i], self.l_ptr[i + 1]);
+            z[i] = r[i] - sparse_dot32(&self.l_col[s..e], &self.l_val[s..e], z);
+        }
+        for i in (0..n).rev() {
+            let (s, e) = (self.u_ptr[i], self.u_ptr[i + 1]);
+            z[i] = (z[i] - sparse_dot32(&self.u_col[s..e], &self.u_val[s..e], z)) * self.inv_diag[i];
+        }
+    }
+}
+
+/// A with 32-bit column indices (the product of the "split" variant).
+struct Csr32 {
+    ptr: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl Csr32 {
+    fn new(a: &Csr) -> Csr32 {
+        Csr32 {
+            ptr: a.ptr.clone(),
+            col: a.col.iter().map(|&c| c as u32).collect(),
+            val: a.val.clone(),
+        }
+    }
+
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        for (i, y) in y.iter_mut().enumerate() {
+            let (s, e) = (self.ptr[i], self.ptr[i + 1]);
+            *y = sparse_dot32(&self.col[s..e], &self.val[s..e], x);
+        }
+    }
+}
+
 /// diag(M_w⁻¹, M_θ⁻¹) for the 2 × 2 block system.
 struct BlockDiag<'a> {
     n_w: usize,
@@ -336,10 +434,7 @@ fn gmres(a: &Csr, pc: &dyn Pc, b: &[f64], tol: f64) -> Outcome {
             break 'outer;
         }
     }
-    Outcome {
-        iterations: it,
-        x,
-    }
+    Outcome { iterations: it, x }
 }
 
 /// Right-preconditioned BiCGStab (one iteration = two products and two preconditioner solves).
@@ -374,10 +469,7 @@ fn bicgstab(a: &Csr, pc: &dyn Pc, b: &[f64], tol: f64) -> Outcome {
         }
         it += 1;
     }
-    Outcome {
-        iterations: it,
-        x,
-    }
+    Outcome { iterations: it, x }
 }
 
 /// Preconditioned CG (A and M SPD).
@@ -404,10 +496,7 @@ fn cg(a: &Csr, pc: &dyn Pc, b: &[f64], tol: f64) -> Outcome {
         p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
         it += 1;
     }
-    Outcome {
-        iterations: it,
-        x,
-    }
+    Outcome { iterations: it, x }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -564,7 +653,9 @@ fn padded_velocity_block(problem: &Problem, kw: &Csr) -> (Csr, Vec<usize>, Vec<V
         val: m.values,
     };
     // Rigid-body modes: 3 translations, 3 rotations about the centroid.
-    let centre = coords.iter().fold([0.0; 3], |c, x| [c[0] + x[0], c[1] + x[1], c[2] + x[2]]);
+    let centre = coords
+        .iter()
+        .fold([0.0; 3], |c, x| [c[0] + x[0], c[1] + x[1], c[2] + x[2]]);
     let centre = centre.map(|c| c / n_nodes as f64);
     let mut modes = Vec::new();
     for mode in 0..6 {
@@ -651,7 +742,16 @@ fn setup<P>(f: impl FnOnce() -> P) -> (P, f64, f64) {
 type Solver = fn(&Csr, &dyn Pc, &[f64], f64) -> Outcome;
 
 /// Runs one (matrix, preconditioner, method) on every right-hand side and prints a row per RHS.
-fn measure(label: &str, a: &Csr, pc: &dyn Pc, method: Solver, rhss: &[(&str, Vec<f64>)], reps: usize, setup_s: f64, setup_mb: f64) {
+fn measure(
+    label: &str,
+    a: &Csr,
+    pc: &dyn Pc,
+    method: Solver,
+    rhss: &[(&str, Vec<f64>)],
+    reps: usize,
+    setup_s: f64,
+    setup_mb: f64,
+) {
     for (name, b) in rhss {
         let (tmin, tmed, out) = timed(reps, || method(a, pc, b, 1e-8));
         let tight = method(a, pc, b, 1e-10);
@@ -810,10 +910,28 @@ fn main() -> anyhow::Result<()> {
                 *yi = acc;
             }
         });
-        println!("KERNEL | y = A x, u32 indices, unchecked | min {:.4} med {:.4} s", tmin, tmed);
+        println!(
+            "KERNEL | y = A x, u32 indices, unchecked | min {:.4} med {:.4} s",
+            tmin, tmed
+        );
         let ilu = Ilu0::new(a);
         let (tmin, tmed, _) = timed(20, || ilu.apply(&x, &mut y));
-        println!("KERNEL | ILU(0) solve with A's factor | min {:.4} med {:.4} s", tmin, tmed);
+        println!(
+            "KERNEL | ILU(0) solve with A's factor | min {:.4} med {:.4} s",
+            tmin, tmed
+        );
+        let a32 = Csr32::new(a);
+        let (tmin, tmed, _) = timed(20, || a32.apply(&x, &mut y));
+        println!(
+            "KERNEL | y = A x, u32 indices, 4 partial sums | min {:.4} med {:.4} s",
+            tmin, tmed
+        );
+        let split = Ilu0Split::new(a);
+        let (tmin, tmed, _) = timed(20, || split.apply(&x, &mut y));
+        println!(
+            "KERNEL | ILU(0) solve, L and U split, u32 indices | min {:.4} med {:.4} s",
+            tmin, tmed
+        );
     }
     // --- Coupled matrix A.
     if wants("jacobi") {
@@ -824,6 +942,10 @@ fn main() -> anyhow::Result<()> {
         let (pc, s, mb) = setup(|| Ilu0::new(a));
         measure("A  GMRES+ILU0 (ours)", a, &pc, gmres, &rhss, reps, s, mb);
         measure("A  BiCGStab+ILU0 (ours)", a, &pc, bicgstab, &rhss, reps, s, mb);
+    }
+    if wants("ilu-split") {
+        let (pc, s, mb) = setup(|| Ilu0Split::new(a));
+        measure("A  GMRES+ILU0 split (ours)", a, &pc, gmres, &rhss, reps, s, mb);
     }
     if wants("bilu") {
         let (pcs, s, mb) = setup(|| (Ilu0::new(&kw), Ilu0::new(&kt)));
@@ -905,7 +1027,12 @@ fn main() -> anyhow::Result<()> {
             let variant = std::env::var("KRYST_AMG").unwrap_or_else(|_| "sa".into());
             let mut builder = AMGBuilder::new();
             match variant.as_str() {
-                "sa" => builder = builder.nodal(true, 3).near_nullspace(modes.clone()).interpolation_type(InterpType::Multipass),
+                "sa" => {
+                    builder = builder
+                        .nodal(true, 3)
+                        .near_nullspace(modes.clone())
+                        .interpolation_type(InterpType::Multipass)
+                }
                 "sa-scalar" => builder = builder.interpolation_type(InterpType::Multipass),
                 _ => {}
             }
@@ -961,7 +1088,16 @@ fn main() -> anyhow::Result<()> {
             w: pc,
             theta: &ilu_t,
         };
-        measure("A  GMRES+[AMG,ILU0] (kryst+ours)", a, &block, gmres, &rhss, reps, s + s2, mb + mb2);
+        measure(
+            "A  GMRES+[AMG,ILU0] (kryst+ours)",
+            a,
+            &block,
+            gmres,
+            &rhss,
+            reps,
+            s + s2,
+            mb + mb2,
+        );
     }
 
     // --- Today's direct path: StepSystem (faer LDLᵀ, contact unknowns last).
