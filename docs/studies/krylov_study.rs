@@ -947,6 +947,40 @@ fn main() -> anyhow::Result<()> {
         let (pc, s, mb) = setup(|| Ilu0Split::new(a));
         measure("A  GMRES+ILU0 split (ours)", a, &pc, gmres, &rhss, reps, s, mb);
     }
+    // The crate's own solver (`solver::krylov::IterativeSolver`, GMRES(30) + split ILU(0)), built
+    // from S = J A as `StepSystem` stores it.
+    if wants("crate") {
+        use thermocontact::solver::krylov::{IterativeSolver, KrylovParams, LinearSolver};
+        let mut val = a.val.clone();
+        for row in n_w..a.n {
+            val[a.ptr[row]..a.ptr[row + 1]].iter_mut().for_each(|v| *v = -*v);
+        }
+        let s_form = CscMatrix {
+            n_rows: a.n,
+            n_cols: a.n,
+            col_ptr: a.ptr.clone(),
+            row_idx: a.col.clone(),
+            values: val,
+        };
+        let params = KrylovParams {
+            rtol: 1e-8,
+            max_iterations: MAX_IT,
+            restart: RESTART,
+        };
+        let (solver, s, mb) = setup(|| IterativeSolver::new(&s_form, n_w, params).expect("setup"));
+        for (name, b) in &rhss {
+            let (tmin, tmed, (its, x)) = timed(reps, || {
+                let mut x = vec![0.0; a.n];
+                let info = solver.solve(b, &mut x).expect("solve");
+                (info.iterations, x)
+            });
+            println!(
+                "ROW | {:<28} | {name:<6} | setup {s:>7.3} s {mb:>7.0} MiB | it(1e-8) {its:>4} | it(1e-10)    - | solve min {tmin:>7.3} med {tmed:>7.3} s | res {:.1e}",
+                "A  solver::krylov (crate)",
+                residual(a, b, &x)
+            );
+        }
+    }
     if wants("bilu") {
         let (pcs, s, mb) = setup(|| (Ilu0::new(&kw), Ilu0::new(&kt)));
         let pc = BlockDiag {
