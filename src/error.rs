@@ -105,6 +105,20 @@ pub enum Error {
          loads: check their magnitudes"
     )]
     NonFiniteSolution { non_finite: usize, unknowns: usize },
+    /// A Krylov solve of the step system hit its iteration cap.
+    #[error(
+        "{method} did not reach ‖b − Ax‖ ≤ {rtol:e} ‖b‖ in {iterations} iterations (relative residual {residual:e})"
+    )]
+    KrylovNotConverged {
+        method: &'static str,
+        iterations: usize,
+        rtol: f64,
+        /// The last relative residual.
+        residual: f64,
+        /// The relative residual before the first iteration and after each one (as the method
+        /// estimates it).
+        history: Vec<f64>,
+    },
     /// Writing an output file failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),

@@ -9,6 +9,7 @@ pub mod condensed;
 pub mod descent;
 pub mod factor;
 pub mod fast;
+pub mod krylov;
 pub mod newton;
 pub mod paper;
 pub mod system;

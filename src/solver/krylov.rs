@@ -1,0 +1,478 @@
+//! Linear solvers for the step system A x = b: the direct LDLᵀ of today and a first iterative one,
+//! restarted GMRES right-preconditioned by ILU(0) of A (issue 11).
+//!
+//! A = [[ℳ/k + 𝒦_A + k𝒦_B, G], [−Gᵀ, ℳ_θ/k + 𝒦_θ]] is not symmetric, but its symmetric part is
+//! block-diagonal with SPD blocks (A is positive real), so GMRES converges and ILU(0) needs no
+//! pivoting. Why this pair and when it pays (the study that chose it): docs/krylov-study.md. In
+//! short: at the paper's time step (k = 1/64) the mass term dominates and GMRES + ILU(0) needs
+//! 5–7 iterations at 10⁵–10⁶ unknowns; the iteration count grows with k (≈ 20 at k = 1/8), where
+//! an AMG-preconditioned velocity block would keep it bounded.
+//!
+//! [`LinearSolver`] is the interface a step solver would hold; nothing in the crate uses the
+//! iterative solver yet (the default behaviour is unchanged).
+
+use super::factor::QuasiDefiniteLdlt;
+use crate::error::Error;
+use crate::fem::sparse::CscMatrix;
+
+/// Tolerance and caps of a Krylov solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KrylovParams {
+    /// Stop when ‖b − A x‖ ≤ rtol ‖b‖ (the true, unpreconditioned residual).
+    pub rtol: f64,
+    /// Iteration cap (products with A).
+    pub max_iterations: usize,
+    /// GMRES restart length.
+    pub restart: usize,
+}
+
+impl Default for KrylovParams {
+    fn default() -> Self {
+        KrylovParams {
+            rtol: 1e-10,
+            max_iterations: 500,
+            restart: 30,
+        }
+    }
+}
+
+/// What a solve did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveInfo {
+    /// Krylov iterations (0 for a direct solve).
+    pub iterations: usize,
+    /// ‖b − A x‖ / ‖b‖ at the end as the method estimates it (0 for a direct solve).
+    pub residual: f64,
+}
+
+/// A solver of the step system A x = b, set up once for the constant matrix.
+pub trait LinearSolver: Send + Sync {
+    /// Number of unknowns.
+    fn n(&self) -> usize;
+
+    /// Solves A x = b; on entry `x` holds the initial guess (a direct solver ignores it).
+    fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, Error>;
+}
+
+/// A square sparse matrix stored by rows, column indices sorted within each row.
+#[derive(Debug, Clone)]
+pub struct CsrMatrix {
+    n: usize,
+    ptr: Vec<usize>,
+    col: Vec<usize>,
+    val: Vec<f64>,
+}
+
+impl CsrMatrix {
+    /// A = J S from the symmetric form S = J A of the step matrix ([`super::system::StepSystem`]
+    /// stores S), J = diag(I, −I) with the first `n_w` unknowns the velocities: S's columns are
+    /// its rows, so A's rows are S's columns with the temperature rows negated.
+    pub fn from_symmetric_form(s: &CscMatrix, n_w: usize) -> Self {
+        assert_eq!(s.n_rows, s.n_cols, "a square matrix");
+        let mut val = s.values.clone();
+        for row in n_w..s.n_cols {
+            for v in &mut val[s.col_ptr[row]..s.col_ptr[row + 1]] {
+                *v = -*v;
+            }
+        }
+        CsrMatrix {
+            n: s.n_rows,
+            ptr: s.col_ptr.clone(),
+            col: s.row_idx.clone(),
+            val,
+        }
+    }
+
+    /// Number of rows (and columns).
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Stored entries.
+    pub fn nnz(&self) -> usize {
+        self.val.len()
+    }
+
+    /// y = A x.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        for (i, y) in y.iter_mut().enumerate().take(self.n) {
+            let (s, e) = (self.ptr[i], self.ptr[i + 1]);
+            *y = sparse_dot(&self.col[s..e], &self.val[s..e], x);
+        }
+    }
+}
+
+/// Σ v·x[c] with four partial sums: a single sequential sum makes each row a long chain of
+/// dependent additions (docs/krylov-study.md, §5).
+#[inline]
+fn sparse_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
+    let (cr, vr) = (c4.remainder(), v4.remainder());
+    for (c, v) in c4.zip(v4) {
+        for k in 0..4 {
+            acc[k] += v[k] * x[c[k]];
+        }
+    }
+    let tail: f64 = cr.iter().zip(vr).map(|(&c, v)| v * x[c]).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// Σ v·x[c] over 32-bit column indices, four partial sums.
+#[inline]
+fn sparse_dot32(cols: &[u32], vals: &[f64], x: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (c4, v4) = (cols.chunks_exact(4), vals.chunks_exact(4));
+    let (cr, vr) = (c4.remainder(), v4.remainder());
+    for (c, v) in c4.zip(v4) {
+        for k in 0..4 {
+            acc[k] += v[k] * x[c[k] as usize];
+        }
+    }
+    let tail: f64 = cr.iter().zip(vr).map(|(&c, v)| v * x[c as usize]).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// ILU(0) of a [`CsrMatrix`]: L (unit diagonal) and U on A's own pattern.
+///
+/// Stored for its sweeps: L and U in separate arrays, so that each sweep streams only its own
+/// half, with 32-bit column indices and U's inverted diagonal. Measured at 98k unknowns: one
+/// solve 5 ms, against 26 ms with L and U left interleaved in A's rows (docs/krylov-study.md, §5).
+#[derive(Debug, Clone)]
+pub struct Ilu0 {
+    l_ptr: Vec<usize>,
+    l_col: Vec<u32>,
+    l_val: Vec<f64>,
+    u_ptr: Vec<usize>,
+    u_col: Vec<u32>,
+    u_val: Vec<f64>,
+    inv_diag: Vec<f64>,
+}
+
+impl Ilu0 {
+    /// Factors A (IKJ order, no pivoting). A zero or non-finite pivot is an error.
+    pub fn new(a: &CsrMatrix) -> Result<Self, Error> {
+        let n = a.n;
+        if u32::try_from(n).is_err() {
+            return Err(Error::Factorization(format!(
+                "ILU(0): {n} unknowns exceed 32-bit indices"
+            )));
+        }
+        let mut diag = Vec::with_capacity(n);
+        for i in 0..n {
+            let row = &a.col[a.ptr[i]..a.ptr[i + 1]];
+            match row.binary_search(&i) {
+                Ok(p) => diag.push(a.ptr[i] + p),
+                Err(_) => return Err(Error::Factorization(format!("ILU(0): row {i} has no diagonal entry"))),
+            }
+        }
+        let mut val = a.val.clone();
+        let mut pos = vec![usize::MAX; n];
+        for i in 0..n {
+            let (s, e) = (a.ptr[i], a.ptr[i + 1]);
+            for p in s..e {
+                pos[a.col[p]] = p;
+            }
+            for p in s..diag[i] {
+                let k = a.col[p];
+                let l = val[p] / val[diag[k]];
+                val[p] = l;
+                for q in diag[k] + 1..a.ptr[k + 1] {
+                    let t = pos[a.col[q]];
+                    if t != usize::MAX {
+                        val[t] -= l * val[q];
+                    }
+                }
+            }
+            for p in s..e {
+                pos[a.col[p]] = usize::MAX;
+            }
+            let pivot = val[diag[i]];
+            if pivot == 0.0 || !pivot.is_finite() {
+                return Err(Error::Factorization(format!("ILU(0): pivot {pivot} in row {i}")));
+            }
+        }
+        let n_lower: usize = (0..n).map(|i| diag[i] - a.ptr[i]).sum();
+        let mut f = Ilu0 {
+            l_ptr: Vec::with_capacity(n + 1),
+            l_col: Vec::with_capacity(n_lower),
+            l_val: Vec::with_capacity(n_lower),
+            u_ptr: Vec::with_capacity(n + 1),
+            u_col: Vec::with_capacity(a.nnz() - n_lower - n),
+            u_val: Vec::with_capacity(a.nnz() - n_lower - n),
+            inv_diag: Vec::with_capacity(n),
+        };
+        f.l_ptr.push(0);
+        f.u_ptr.push(0);
+        for i in 0..n {
+            for p in a.ptr[i]..diag[i] {
+                f.l_col.push(a.col[p] as u32);
+                f.l_val.push(val[p]);
+            }
+            f.l_ptr.push(f.l_col.len());
+            for p in diag[i] + 1..a.ptr[i + 1] {
+                f.u_col.push(a.col[p] as u32);
+                f.u_val.push(val[p]);
+            }
+            f.u_ptr.push(f.u_col.len());
+            f.inv_diag.push(1.0 / val[diag[i]]);
+        }
+        Ok(f)
+    }
+
+    /// z = (LU)⁻¹ r.
+    pub fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let n = self.inv_diag.len();
+        for i in 0..n {
+            let (s, e) = (self.l_ptr[i], self.l_ptr[i + 1]);
+            z[i] = r[i] - sparse_dot32(&self.l_col[s..e], &self.l_val[s..e], z);
+        }
+        for i in (0..n).rev() {
+            let (s, e) = (self.u_ptr[i], self.u_ptr[i + 1]);
+            z[i] = (z[i] - sparse_dot32(&self.u_col[s..e], &self.u_val[s..e], z)) * self.inv_diag[i];
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Restarted GMRES(m), right-preconditioned by ILU(0) (so its residual estimate is the true
+/// residual's), modified Gram–Schmidt, Givens rotations. `x` holds the initial guess.
+///
+/// Fails with [`Error::KrylovNotConverged`] (with the residual history) at the iteration cap.
+pub fn gmres(a: &CsrMatrix, pc: &Ilu0, b: &[f64], x: &mut [f64], params: &KrylovParams) -> Result<SolveInfo, Error> {
+    let n = a.n;
+    let m = params.restart.max(1);
+    let bnorm = norm(b);
+    if bnorm == 0.0 {
+        x.fill(0.0);
+        return Ok(SolveInfo::default());
+    }
+    let target = params.rtol * bnorm;
+    let mut r = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    let mut z = vec![0.0; n];
+    a.mul(x, &mut w);
+    r.iter_mut().zip(b.iter().zip(&w)).for_each(|(r, (b, ax))| *r = b - ax);
+    let mut v: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
+    let mut history = vec![norm(&r) / bnorm];
+    let mut it = 0;
+    loop {
+        let beta = norm(&r);
+        if !beta.is_finite() {
+            return Err(Error::NonFiniteSolution {
+                non_finite: r.iter().filter(|v| !v.is_finite()).count(),
+                unknowns: n,
+            });
+        }
+        if beta <= target {
+            return Ok(SolveInfo {
+                iterations: it,
+                residual: beta / bnorm,
+            });
+        }
+        if it >= params.max_iterations {
+            return Err(Error::KrylovNotConverged {
+                method: "GMRES + ILU(0)",
+                iterations: it,
+                rtol: params.rtol,
+                residual: beta / bnorm,
+                history,
+            });
+        }
+        v.clear();
+        v.push(r.iter().map(|r| r / beta).collect());
+        let mut h = vec![vec![0.0; m]; m + 1];
+        let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
+        let mut g = vec![0.0; m + 1];
+        g[0] = beta;
+        let mut used = 0;
+        for j in 0..m {
+            pc.apply(&v[j], &mut z);
+            a.mul(&z, &mut w);
+            for (i, vi) in v.iter().enumerate() {
+                let hij = dot(&w, vi);
+                h[i][j] = hij;
+                w.iter_mut().zip(vi).for_each(|(w, v)| *w -= hij * v);
+            }
+            let hn = norm(&w);
+            h[j + 1][j] = hn;
+            v.push(w.iter().map(|w| if hn > 0.0 { w / hn } else { 0.0 }).collect());
+            for i in 0..j {
+                let t = cs[i] * h[i][j] + sn[i] * h[i + 1][j];
+                h[i + 1][j] = -sn[i] * h[i][j] + cs[i] * h[i + 1][j];
+                h[i][j] = t;
+            }
+            let d = h[j][j].hypot(h[j + 1][j]);
+            cs[j] = h[j][j] / d;
+            sn[j] = h[j + 1][j] / d;
+            h[j][j] = d;
+            h[j + 1][j] = 0.0;
+            g[j + 1] = -sn[j] * g[j];
+            g[j] *= cs[j];
+            it += 1;
+            used = j + 1;
+            history.push(g[j + 1].abs() / bnorm);
+            if g[j + 1].abs() <= target || it >= params.max_iterations || hn == 0.0 {
+                break;
+            }
+        }
+        // x += M⁻¹ V y with H y = g.
+        let mut y = vec![0.0; used];
+        for i in (0..used).rev() {
+            let s: f64 = g[i] - (i + 1..used).map(|k| h[i][k] * y[k]).sum::<f64>();
+            y[i] = s / h[i][i];
+        }
+        w.fill(0.0);
+        for (vi, yi) in v.iter().zip(&y) {
+            w.iter_mut().zip(vi).for_each(|(w, v)| *w += yi * v);
+        }
+        pc.apply(&w, &mut z);
+        x.iter_mut().zip(&z).for_each(|(x, z)| *x += z);
+        a.mul(x, &mut w);
+        r.iter_mut().zip(b.iter().zip(&w)).for_each(|(r, (b, ax))| *r = b - ax);
+    }
+}
+
+/// GMRES + ILU(0) on the step matrix, set up once (the ILU(0) factor, as large as A).
+pub struct IterativeSolver {
+    a: CsrMatrix,
+    pc: Ilu0,
+    params: KrylovParams,
+}
+
+impl IterativeSolver {
+    /// Sets the solver up for the step matrix given in its symmetric form S = J A (`n_w`
+    /// velocity unknowns first).
+    pub fn new(s: &CscMatrix, n_w: usize, params: KrylovParams) -> Result<Self, Error> {
+        let a = CsrMatrix::from_symmetric_form(s, n_w);
+        let pc = Ilu0::new(&a)?;
+        Ok(IterativeSolver { a, pc, params })
+    }
+
+    /// The matrix A.
+    pub fn matrix(&self) -> &CsrMatrix {
+        &self.a
+    }
+}
+
+impl LinearSolver for IterativeSolver {
+    fn n(&self) -> usize {
+        self.a.n
+    }
+
+    fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, Error> {
+        gmres(&self.a, &self.pc, b, x, &self.params)
+    }
+}
+
+/// Today's direct path as a [`LinearSolver`]: the LDLᵀ factor of S = J A.
+pub struct DirectSolver {
+    factor: QuasiDefiniteLdlt,
+    n_w: usize,
+}
+
+impl DirectSolver {
+    /// Factors S = J A (`n_w` velocity unknowns first).
+    pub fn new(s: &CscMatrix, n_w: usize) -> Result<Self, Error> {
+        Ok(DirectSolver {
+            factor: QuasiDefiniteLdlt::new(s)?,
+            n_w,
+        })
+    }
+}
+
+impl LinearSolver for DirectSolver {
+    fn n(&self) -> usize {
+        self.factor.n()
+    }
+
+    fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, Error> {
+        x.copy_from_slice(b);
+        x[self.n_w..].iter_mut().for_each(|v| *v = -*v);
+        self.factor.solve_in_place(x, 1);
+        match x.iter().filter(|v| !v.is_finite()).count() {
+            0 => Ok(SolveInfo::default()),
+            non_finite => Err(Error::NonFiniteSolution {
+                non_finite,
+                unknowns: x.len(),
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small nonsymmetric positive-real matrix in the S = J A form: S = [[K, G], [Gᵀ, −M]].
+    fn small_s() -> (CscMatrix, usize) {
+        let n_w = 4;
+        let mut t = Vec::new();
+        for i in 0..6 {
+            let d = if i < n_w { 4.0 } else { -3.0 };
+            t.push((i, i, d));
+        }
+        for i in 0..n_w - 1 {
+            t.push((i, i + 1, -1.0));
+            t.push((i + 1, i, -1.0));
+        }
+        for (r, c, g) in [(0, 4, 0.5), (2, 5, -0.3), (3, 4, 0.2)] {
+            t.push((r, c, g));
+            t.push((c, r, g));
+        }
+        (CscMatrix::from_triplets(6, 6, t), n_w)
+    }
+
+    #[test]
+    fn iterative_and_direct_agree_on_a_small_system() {
+        let (s, n_w) = small_s();
+        let b = [1.0, -2.0, 0.5, 3.0, 1.0, -1.0];
+        let direct = DirectSolver::new(&s, n_w).unwrap();
+        let params = KrylovParams {
+            rtol: 1e-13,
+            ..KrylovParams::default()
+        };
+        let iterative = IterativeSolver::new(&s, n_w, params).unwrap();
+        let (mut xd, mut xi) = (vec![0.0; 6], vec![0.0; 6]);
+        direct.solve(&b, &mut xd).unwrap();
+        let info = iterative.solve(&b, &mut xi).unwrap();
+        assert!(info.iterations > 0 && info.residual <= 1e-13, "{info:?}");
+        for (d, i) in xd.iter().zip(&xi) {
+            assert!((d - i).abs() <= 1e-12, "{xd:?} {xi:?}");
+        }
+        // A x = b for A = J S.
+        let mut ax = vec![0.0; 6];
+        iterative.matrix().mul(&xd, &mut ax);
+        for (ax, b) in ax.iter().zip(&b) {
+            assert!((ax - b).abs() <= 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_capped_solve_is_a_typed_error_with_its_history() {
+        let (s, n_w) = small_s();
+        let params = KrylovParams {
+            rtol: 1e-300,
+            max_iterations: 2,
+            restart: 1,
+        };
+        let solver = IterativeSolver::new(&s, n_w, params).unwrap();
+        let mut x = vec![0.0; 6];
+        match solver.solve(&[1.0; 6], &mut x) {
+            Err(Error::KrylovNotConverged {
+                iterations, history, ..
+            }) => {
+                assert_eq!(iterations, 2);
+                assert_eq!(history.len(), 3);
+            }
+            other => panic!("expected KrylovNotConverged, got {other:?}"),
+        }
+    }
+}

@@ -1,0 +1,55 @@
+//! The iterative linear solver (GMRES + ILU(0), `solver::krylov`) against the direct LDLᵀ on
+//! the step matrix of a small 3D problem (`scenarios/paper3d.toml`, coarsened), at the paper's
+//! time step and at a large one.
+
+use thermocontact::solver::krylov::{DirectSolver, IterativeSolver, KrylovParams, LinearSolver};
+use thermocontact::solver::system::{State, StepSystem};
+use thermocontact::Scenario;
+
+fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+#[test]
+fn iterative_and_direct_solves_agree_on_a_3d_step_matrix() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/paper3d.toml");
+    for steps in ["64", "8"] {
+        let overrides: Vec<String> = ["mesh.nx=12", "mesh.ny=4", "mesh.nz=4", &format!("time.steps={steps}")]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let problem = Scenario::load_file(&path, &overrides).unwrap().build().unwrap();
+        let system = StepSystem::new(&problem).unwrap();
+        let n_w = system.n_w();
+        let direct = DirectSolver::new(&system.matrix, n_w).unwrap();
+        let params = KrylovParams {
+            rtol: 1e-12,
+            ..KrylovParams::default()
+        };
+        let iterative = IterativeSolver::new(&system.matrix, n_w, params).unwrap();
+
+        // The first step's right-hand side, and a unit tangential load at a contact node.
+        let k = problem.time_step();
+        let free = system.rhs(&problem, &State::initial(&problem), k).unwrap();
+        let mut unit = vec![0.0; system.n_unknowns()];
+        unit[problem.contact[problem.contact.len() / 2].tangent_dofs[0].unwrap()] = 1.0;
+        for b in [free, unit] {
+            let mut reference = b.clone();
+            system.solve_in_place(&mut reference).unwrap();
+            let (mut xd, mut xi) = (vec![0.0; b.len()], vec![0.0; b.len()]);
+            direct.solve(&b, &mut xd).unwrap();
+            let info = iterative.solve(&b, &mut xi).unwrap();
+            assert!(info.iterations > 0 && info.iterations < 100, "k = 1/{steps}: {info:?}");
+            assert!(
+                max_rel_diff(&reference, &xd) < 1e-12,
+                "direct solver against StepSystem"
+            );
+            let diff = max_rel_diff(&reference, &xi);
+            assert!(
+                diff < 1e-8,
+                "k = 1/{steps}: GMRES + ILU(0) differs by {diff:e} ({info:?})"
+            );
+        }
+    }
+}
