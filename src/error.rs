@@ -160,6 +160,8 @@ pub enum FactorStage {
     Layout,
     /// The Cholesky factor of the contact compliance D on Γ_C (the descent's metric).
     ContactCompliance,
+    /// The incomplete LU factor ILU(0) that preconditions the Krylov solver.
+    IncompleteLu,
 }
 
 impl std::fmt::Display for FactorStage {
@@ -170,6 +172,7 @@ impl std::fmt::Display for FactorStage {
             FactorStage::Numeric => "the numeric LDLᵀ",
             FactorStage::Layout => "the factor's layout",
             FactorStage::ContactCompliance => "the contact compliance's Cholesky factor",
+            FactorStage::IncompleteLu => "the incomplete LU factor ILU(0)",
         })
     }
 }

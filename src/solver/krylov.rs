@@ -12,7 +12,7 @@
 //! iterative solver yet (the default behaviour is unchanged).
 
 use super::factor::QuasiDefiniteLdlt;
-use crate::error::Error;
+use crate::error::{Error, FactorStage};
 use crate::fem::sparse::CscMatrix;
 
 /// Tolerance and caps of a Krylov solve.
@@ -154,16 +154,22 @@ impl Ilu0 {
     pub fn new(a: &CsrMatrix) -> Result<Self, Error> {
         let n = a.n;
         if u32::try_from(n).is_err() {
-            return Err(Error::Factorization(format!(
-                "ILU(0): {n} unknowns exceed 32-bit indices"
-            )));
+            return Err(Error::Factorization {
+                stage: FactorStage::IncompleteLu,
+                detail: format!("{n} unknowns exceed 32-bit indices"),
+            });
         }
         let mut diag = Vec::with_capacity(n);
         for i in 0..n {
             let row = &a.col[a.ptr[i]..a.ptr[i + 1]];
             match row.binary_search(&i) {
                 Ok(p) => diag.push(a.ptr[i] + p),
-                Err(_) => return Err(Error::Factorization(format!("ILU(0): row {i} has no diagonal entry"))),
+                Err(_) => {
+                    return Err(Error::Factorization {
+                        stage: FactorStage::IncompleteLu,
+                        detail: format!("row {i} has no diagonal entry"),
+                    })
+                }
             }
         }
         let mut val = a.val.clone();
@@ -189,7 +195,10 @@ impl Ilu0 {
             }
             let pivot = val[diag[i]];
             if pivot == 0.0 || !pivot.is_finite() {
-                return Err(Error::Factorization(format!("ILU(0): pivot {pivot} in row {i}")));
+                return Err(Error::Factorization {
+                    stage: FactorStage::IncompleteLu,
+                    detail: format!("pivot {pivot} in row {i}"),
+                });
             }
         }
         let n_lower: usize = (0..n).map(|i| diag[i] - a.ptr[i]).sum();
