@@ -495,6 +495,9 @@ impl Scenario {
                 .parse()
                 .map_err(|e: toml::de::Error| Error::Scenario(format!("the file is not valid TOML: {e}")))?;
             resolve_mesh_file(&mut user, folder);
+            if given.is_some() {
+                refuse_mesh_keys(&user)?;
+            }
             overlay(&mut table, user, "")?;
         }
         // All overrides form one table laid over at once, so that `friction.law=tresca` and
@@ -504,11 +507,14 @@ impl Scenario {
         for assignment in overrides {
             merge(&mut assigned, parse_override(assignment)?);
         }
+        if given.is_some() {
+            refuse_mesh_keys(&assigned)?;
+        }
         overlay(&mut table, assigned, "")?;
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
         if let Some(mesh) = given {
-            scenario.take_given_mesh(mesh)?;
+            scenario.loaded = LoadedMesh(Some(mesh));
         }
         if let Some(from) = &mut scenario.initial.from {
             *from = std::path::absolute(&*from).unwrap_or_else(|_| from.clone());
@@ -520,25 +526,6 @@ impl Scenario {
         }
         scenario.validate()?;
         Ok(scenario)
-    }
-
-    /// Takes a mesh given in memory ([`Scenario::load_with_mesh`]): with no other mesh keys.
-    fn take_given_mesh(&mut self, mesh: Arc<Mesh>) -> Result<(), Error> {
-        let beside = |key: &str, value: &dyn std::fmt::Debug| {
-            Err(invalid(
-                key,
-                value,
-                "no mesh keys beside a mesh given in memory (it replaces mesh.file and the generator)",
-            ))
-        };
-        match (&self.geometry, &self.mesh) {
-            (Some(g), _) => return beside("geometry.lengths", &g.lengths),
-            (_, MeshSpec { file: Some(file), .. }) => return beside("mesh.file", file),
-            (_, MeshSpec { nz: Some(nz), .. }) => return beside("mesh.nz", nz),
-            _ => {}
-        }
-        self.loaded = LoadedMesh(Some(mesh));
-        Ok(())
     }
 
     /// The scenario as TOML (what a run saves beside its results).
@@ -742,7 +729,13 @@ impl Scenario {
     fn fits_in_memory(&self) -> Result<(), Error> {
         let d = self.dim();
         let (nodes, keys) = match (&self.loaded.0, self.structured()) {
-            (Some(mesh), _) => (mesh.n_nodes() as f64, "mesh.file".to_string()),
+            (Some(mesh), _) => {
+                let source = match &self.mesh.file {
+                    Some(_) => "mesh.file",
+                    None => "the mesh given in memory",
+                };
+                (mesh.n_nodes() as f64, source.to_string())
+            }
             (None, Some(s)) => {
                 let names = ["mesh.nx", "mesh.ny", "mesh.nz"];
                 let nodes = s.cells.iter().map(|&n| n as f64 + 1.0).product();
@@ -1094,6 +1087,11 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
     };
     if let Some(table) = header(line) {
         // The error is about the table as a whole (a key it lacks or must not have).
+        if let Some(field) = missing_field(&message) {
+            return Error::MissingKey {
+                key: format!("{table}.{field}"),
+            };
+        }
         return Error::Scenario(format!("in `{table}`: {message}"));
     }
     let table = before[..line_start].lines().rev().find_map(header);
@@ -1109,6 +1107,11 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
         value: value.trim().to_string(),
         expected: plain(&message),
     }
+}
+
+/// The field of serde's "missing field `bound`".
+fn missing_field(message: &str) -> Option<&str> {
+    message.strip_prefix("missing field `")?.strip_suffix('`')
 }
 
 /// serde's "invalid value: integer `-1`, expected usize" as what a user should write.
@@ -1245,6 +1248,22 @@ fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
 
 /// Removes the structured generator from `base` for a mesh from elsewhere (a file, or given in
 /// memory): its geometry and cell counts, and the tractions on the rectangle's parts.
+/// A mesh given in memory ([`Scenario::load_with_mesh`]) replaces `mesh.file` and the
+/// generator, so the user's scenario may not set them: refused here, by key, because the
+/// generator's keys are gone from the base table and the overlay would only say "unknown".
+fn refuse_mesh_keys(user: &Table) -> Result<(), Error> {
+    let expected = "no mesh keys beside a mesh given in memory (it replaces mesh.file and the generator)";
+    if let Some(geometry) = user.get("geometry") {
+        return Err(invalid("geometry", &geometry.to_string(), expected));
+    }
+    if let Some(Value::Table(mesh)) = user.get("mesh") {
+        if let Some((key, value)) = mesh.iter().next() {
+            return Err(invalid(&format!("mesh.{key}"), &value.to_string(), expected));
+        }
+    }
+    Ok(())
+}
+
 fn drop_generator(base: &mut Table) {
     base.remove("geometry");
     base.insert("mesh".into(), Value::Table(Table::new()));

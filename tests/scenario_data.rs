@@ -86,7 +86,9 @@ fn initial_data_as_expressions_are_checked_against_the_constraints() {
 /// Every bad datum is refused when the scenario is read, naming the key.
 #[test]
 fn bad_data_name_their_key() {
-    let cases: [(&str, &str); 7] = [
+    let cases: [(&str, &str); 8] = [
+        // A law switched without its parameter: the missing key by its full name.
+        ("friction.law=tresca", "friction.bound"),
         (r#"loads.body_force=["0", "-10*"]"#, "loads.body_force"),
         (r#"loads.body_force=["0", "q*t"]"#, "loads.body_force"),
         (r#"loads.body_force=[0, 0, 1]"#, "loads.body_force"),
@@ -184,11 +186,11 @@ fn a_mesh_given_in_memory_runs_like_the_generated_one() {
     let e = Scenario::load_with_mesh(Some(text), &["mesh.nx=4".into()], mesh.clone())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("mesh.nx"), "{e}");
+    assert!(e.contains("mesh.nx") && e.contains("in memory"), "{e}");
     let e = Scenario::load_with_mesh(Some(&format!("{text}\n[geometry]\nlengths = [1.0, 1.0]")), &[], mesh)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("geometry"), "{e}");
+    assert!(e.contains("geometry") && e.contains("in memory"), "{e}");
 }
 
 /// Γ_D may be empty: the paper's example held by friction alone still runs.

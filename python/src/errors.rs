@@ -91,6 +91,7 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
     let name = match error {
         Error::UnknownKey { .. }
         | Error::RemovedKey { .. }
+        | Error::MissingKey { .. }
         | Error::InvalidValue { .. }
         | Error::UnknownPart { .. }
         | Error::LoadOffNeumann { .. }
@@ -102,7 +103,10 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
         | Error::Load(_)
         | Error::Scenario(_) => "ScenarioError",
         Error::Mesh(_) => "MeshError",
-        Error::NotConverged { .. } | Error::Factorization { .. } | Error::NonFiniteSolution { .. } => "SolverError",
+        Error::NotConverged { .. }
+        | Error::KrylovNotConverged { .. }
+        | Error::Factorization { .. }
+        | Error::NonFiniteSolution { .. } => "SolverError",
         Error::Output(_) | Error::Read { .. } | Error::Folder(_) | Error::Checkpoint(_) => "FileError",
         Error::Interrupted { .. } => "Interrupted",
         // A variant added to the core later: the base class, with its message.
@@ -119,6 +123,7 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
                 Error::InvalidValue { key, value, expected } => (Some(key), Some(value), Some(expected)),
                 Error::UnknownKey { key, expected } => (Some(key), None, Some(expected)),
                 Error::RemovedKey { key, instead } => (Some(key), None, Some(instead)),
+                Error::MissingKey { key } => (Some(key), None, None),
                 _ => (None, None, None),
             };
             set("key", key.into_pyobject(py)?.into_any())?;
