@@ -69,6 +69,7 @@ fn solve(ring: &Ring, n_radial: usize, n_around: usize, steps: usize, out: Optio
         elasticity: Isotropic::elasticity(young, poisson),
         expansion: Material::expansion_from(3e-4, young, poisson),
         conductivity: 0.5,
+        reference_temperature: 0.0,
     };
 
     // 3. The problem: boundary roles by part name, the laws on Γ_C, and the loads. The shear

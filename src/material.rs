@@ -61,6 +61,10 @@ pub struct Material {
     pub expansion: f64,
     /// k in K∇θ = k∇θ, the conductivity.
     pub conductivity: f64,
+    /// θ_ref, the stress-free temperature: the thermal stress is C(θ − θ_ref). The paper writes
+    /// Cθ, i.e. θ_ref = 0, so that a body at its initial temperature θ₀ ≠ 0 carries the thermal
+    /// stress Cθ₀ from t = 0 (which is what drives the slip in the paper's example).
+    pub reference_temperature: f64,
 }
 
 impl Material {

@@ -19,6 +19,7 @@
 //!     elasticity: Isotropic::elasticity(10_000.0, 0.3),
 //!     expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
 //!     conductivity: 0.5,
+//!     reference_temperature: 0.0,
 //! };
 //! let problem = ProblemBuilder::new(mesh, material, TimeGrid::new(1.0, 8))
 //!     .dirichlet(&["left"])
@@ -151,6 +152,9 @@ pub struct Problem {
     heat_sources: Vec<Load>,
     /// k_e θ_R ∫_ΓC η: the foundation's part of the heat exchange (constant).
     exchange_load: Vec<f64>,
+    /// θ_ref G 1 on full velocity dofs: the thermal stress C(θ − θ_ref) has a constant part
+    /// −Cθ_ref, which moves to the right-hand side as a load (zero for the paper's θ_ref = 0).
+    reference_load: Vec<f64>,
     /// θ_D at Dirichlet nodes, zero elsewhere (full temperature vector).
     pub theta_dirichlet: Vec<f64>,
     /// u₀, u₁, θ₀.
@@ -408,6 +412,13 @@ impl ProblemBuilder {
             list.push(Load::new(&mesh, kind, datum, label)?);
         }
         let exchange_load = contact_weights.iter().map(|w| k_e * theta_r * w).collect();
+        let mut reference_load = vec![0.0; mesh.n_nodes() * d];
+        let theta_ref = material.reference_temperature;
+        if theta_ref != 0.0 {
+            matrices
+                .coupling
+                .mul_add(theta_ref, &vec![1.0; mesh.n_nodes()], &mut reference_load);
+        }
         let theta_dirichlet = theta_fixed
             .iter()
             .map(|&f| if f { self.boundary_temperature } else { 0.0 })
@@ -460,6 +471,7 @@ impl ProblemBuilder {
             forces,
             heat_sources,
             exchange_load,
+            reference_load,
             theta_dirichlet,
             initial,
             extra_loads: self.extra_loads,
@@ -491,7 +503,7 @@ impl Problem {
 
     /// F(t): ⟨f(t), φ⟩ = ∫ f₀ · φ + ∫_ΓN f₂ · φ on full velocity dofs.
     pub fn force(&self, t: f64) -> Result<Vec<f64>, Error> {
-        let mut force = vec![0.0; self.mesh.n_nodes() * self.dim()];
+        let mut force = self.reference_load.clone();
         for load in &self.forces {
             load.add_to(&self.mesh, t, &mut force)?;
         }

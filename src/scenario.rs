@@ -136,6 +136,7 @@ pub struct MaterialSpec {
     pub poisson: f64,
     pub thermal_expansion: f64,
     pub conductivity: f64,
+    pub reference_temperature: f64,
 }
 
 /// The initial data (10), each a datum at t = 0 (numbers or expressions of x, y, z).
@@ -651,6 +652,7 @@ impl Scenario {
             return Err(invalid("material.poisson", &m.poisson, "a Poisson ratio in (−1, 0.5)"));
         }
         finite("material.thermal_expansion", m.thermal_expansion)?;
+        finite("material.reference_temperature", m.reference_temperature)?;
         positive("material.conductivity", m.conductivity)?;
 
         self.initial.displacement.to_datum("initial.displacement", d)?;
@@ -834,6 +836,7 @@ impl Scenario {
             elasticity: Isotropic::elasticity(m.young, m.poisson),
             expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
             conductivity: m.conductivity,
+            reference_temperature: m.reference_temperature,
         }
     }
 

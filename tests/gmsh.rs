@@ -291,6 +291,7 @@ fn overlapping_parts_and_curved_symmetry_planes_are_refused() {
         elasticity: thermocontact::material::Isotropic::elasticity(1.0, 0.3),
         expansion: 0.0,
         conductivity: 1.0,
+        reference_temperature: 0.0,
     };
     let e = ProblemBuilder::new(twice, material, TimeGrid::new(1.0, 1))
         .contact(&["bottom", "bottom again"])

@@ -224,3 +224,34 @@ fn command_line_input_errors_write_nothing() {
         assert!(!PathBuf::from(&out).exists(), "{set}: output written");
     }
 }
+
+/// θ_ref is the stress-free temperature: raising every temperature datum (θ_D, θ₀, θ_R) and θ_ref
+/// by the same s leaves the mechanics unchanged and shifts θ by s (the equations see θ only
+/// through θ − θ_ref and its gradients), while θ_ref alone changes the run.
+#[test]
+fn the_reference_temperature_shifts_with_the_temperatures() {
+    let (_, base) = coarse(&[]).unwrap().run_quiet().unwrap();
+    let shifted = [
+        "boundary.temperature=35",
+        "initial.temperature=35",
+        "heat_exchange.foundation_temperature=10",
+        "material.reference_temperature=10",
+    ];
+    let (_, moved) = coarse(&shifted).unwrap().run_quiet().unwrap();
+    let scale = base.u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(scale > 1e-6, "the default run moves");
+    assert!(
+        max_diff(&base.u, &moved.u) < 1e-9 * scale,
+        "u: {}",
+        max_diff(&base.u, &moved.u)
+    );
+    let theta: Vec<f64> = base.theta.iter().map(|t| t + 10.0).collect();
+    assert!(
+        max_diff(&theta, &moved.theta) < 1e-9,
+        "θ: {}",
+        max_diff(&theta, &moved.theta)
+    );
+    // θ_ref alone takes the initial thermal stress Cθ₀ away: the slip it drives changes u.
+    let alone = final_u(&coarse(&["material.reference_temperature=25"]).unwrap());
+    assert!(max_diff(&base.u, &alone) > 1e-3 * scale, "θ_ref is used");
+}

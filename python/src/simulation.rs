@@ -307,8 +307,9 @@ impl PyStepInfo {
 /// xi       -- (n_contact, d − 1) float64: friction stress in each contact node's tangent
 ///             coordinates (Simulation.contact_nodes order);
 /// contact  -- the contact table (Contact), computed on first access;
-/// stress   -- (n_cells, 3) (xx, yy, xy) in 2D, (n_cells, 6) (xx, yy, zz, xy, yz, xz) in 3D:
-///             σ = 𝒜ε(w) + ℬε(u) + Cθ per cell, computed on first access from the arrays;
+/// stress   -- (n_cells, 6) (xx, yy, zz, xy, yz, xz), in 2D as in 3D (2D: plane strain, so
+///             σ_zz ≠ 0 and σ_yz = σ_xz = 0): σ = 𝒜ε(w) + ℬε(u) + C(θ − θ_ref) per cell,
+///             computed on first access from the arrays;
 /// info     -- StepInfo (None for the initial state and the final state of a run).
 ///
 /// The arrays are handed out without copies (the state's own memory); changing them in place
@@ -407,7 +408,7 @@ impl PyState {
                 let state = self.core_state(py)?;
                 let problem = &*self.problem;
                 let values = py.detach(|| fields::cell_stress(problem, &state));
-                Ok(matrix(py, values, fields::stress_components(problem.dim()).len()).unbind())
+                Ok(matrix(py, values, fields::STRESS_COMPONENTS.len()).unbind())
             })
             .map(|s| s.clone_ref(py))
     }

@@ -173,7 +173,7 @@ def check_state(state, n_nodes, n_cells, n_contact, d):
     assert state.w.shape == (n_nodes, d) and state.w.dtype == np.float64
     assert state.theta.shape == (n_nodes,) and state.theta.dtype == np.float64
     assert state.xi.shape == (n_contact, d - 1) and state.xi.dtype == np.float64
-    assert state.stress.shape == (n_cells, 3 if d == 2 else 6) and state.stress.dtype == np.float64
+    assert state.stress.shape == (n_cells, 6) and state.stress.dtype == np.float64
     c = state.contact
     assert len(c) == n_contact
     assert c.node.shape == (n_contact,) and c.node.dtype == np.int64

@@ -581,6 +581,7 @@ fn write_snapshot(
     if plan.vtk {
         let file = format!("solution{}vtu", frame_tag(state.n));
         let stress = fields::cell_stress(problem, state);
+        let von_mises = fields::von_mises(&stress);
         let (status, friction) = fields::nodal_contact_fields(problem, &record.contact);
         let grid = Grid {
             dim: d,
@@ -614,11 +615,18 @@ fn write_snapshot(
                 values: &friction,
             },
         ];
-        let cell_fields = [Field {
-            name: "stress",
-            n_components: fields::stress_components(d).len(),
-            values: &stress,
-        }];
+        let cell_fields = [
+            Field {
+                name: "stress",
+                n_components: fields::STRESS_COMPONENTS.len(),
+                values: &stress,
+            },
+            Field {
+                name: "von_mises",
+                n_components: 1,
+                values: &von_mises,
+            },
+        ];
         output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields)?;
         pvd.push(PvdEntry { time: record.t, file });
     }

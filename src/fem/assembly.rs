@@ -207,6 +207,7 @@ mod tests {
             elasticity: Isotropic::elasticity(10_000.0, 0.3),
             expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
             conductivity: 0.1,
+            reference_temperature: 0.0,
         };
         for mesh in [
             crate::mesh::rectangle(3.0, 1.0, 7, 3),

@@ -1,31 +1,31 @@
-//! Derived fields for output: the stress σ = 𝒜ε(w) + ℬε(u) + Cθ per cell (eq. (1)), and the
-//! contact status and friction stress per node.
+//! Derived fields for output: the stress σ = 𝒜ε(w) + ℬε(u) + C(θ − θ_ref) per cell (eq. (1)),
+//! its von Mises norm, and the contact status and friction stress per node.
 
 use crate::fem::simplex::Simplex;
 use crate::problem::Problem;
 use crate::solver::system::State;
 use crate::time::ContactRow;
 
-/// Symmetric-tensor components written per cell: (xx, yy, xy) in 2D,
-/// (xx, yy, zz, xy, yz, xz) in 3D.
-pub fn stress_components(dim: usize) -> &'static [(usize, usize)] {
-    if dim == 2 {
-        &[(0, 0), (1, 1), (0, 1)]
-    } else {
-        &[(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)]
-    }
-}
+/// The symmetric-tensor components written per cell, in VTK's order for 6-component arrays
+/// (xx, yy, zz, xy, yz, xz), which ParaView reads as a symmetric tensor, in 2D as in 3D.
+///
+/// In 2D the body is in plane strain (the paper's ℬ is the plane-strain Lamé form): ε_zz = 0,
+/// so σ_zz = λ_𝒜 tr ε(w) + λ_ℬ tr ε(u) + c(θ − θ_ref), which the 2D equations never use but a
+/// von Mises stress must include; σ_yz = σ_xz = 0. Written as (xx, yy, xy) the 2D tensor was a
+/// 3-vector to ParaView (glyphs and warps of a stress make no sense).
+pub const STRESS_COMPONENTS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)];
 
-/// σ per cell (P1 strains are constant per cell; θ is averaged over the cell's vertices).
+/// σ per cell, 6 components in the order of [`STRESS_COMPONENTS`] (P1 strains are constant
+/// per cell; θ is averaged over the cell's vertices).
 pub fn cell_stress(problem: &Problem, state: &State) -> Vec<f64> {
     let mesh = &problem.mesh;
     let d = mesh.dim;
     let material = &problem.material;
-    let comps = stress_components(d);
-    let mut out = Vec::with_capacity(mesh.n_cells() * comps.len());
+    let mut out = Vec::with_capacity(mesh.n_cells() * STRESS_COMPONENTS.len());
     for e in 0..mesh.n_cells() {
         let t = Simplex::new(d, &mesh.cell_coords(e));
         let nodes = mesh.cell(e);
+        // A full 3 × 3 strain with zero z rows in 2D (plane strain).
         let strain = |field: &[f64]| {
             let mut eps = [[0.0; 3]; 3];
             for (a, &p) in nodes.iter().enumerate() {
@@ -38,15 +38,28 @@ pub fn cell_stress(problem: &Problem, state: &State) -> Vec<f64> {
             }
             eps
         };
-        let viscous = material.viscosity.apply(d, &strain(&state.w));
-        let elastic = material.elasticity.apply(d, &strain(&state.u));
+        let viscous = material.viscosity.apply(3, &strain(&state.w));
+        let elastic = material.elasticity.apply(3, &strain(&state.u));
         let theta = nodes.iter().map(|&p| state.theta[p]).sum::<f64>() / nodes.len() as f64;
-        for &(i, j) in comps {
-            let thermal = if i == j { material.expansion * theta } else { 0.0 };
-            out.push(viscous[i][j] + elastic[i][j] + thermal);
+        let thermal = material.expansion * (theta - material.reference_temperature);
+        for (i, j) in STRESS_COMPONENTS {
+            let isotropic = if i == j { thermal } else { 0.0 };
+            out.push(viscous[i][j] + elastic[i][j] + isotropic);
         }
     }
     out
+}
+
+/// The von Mises stress √(3 J₂) of each cell's σ (6 components per cell, [`STRESS_COMPONENTS`]).
+pub fn von_mises(stress: &[f64]) -> Vec<f64> {
+    stress
+        .chunks_exact(STRESS_COMPONENTS.len())
+        .map(|s| {
+            let [xx, yy, zz, xy, yz, xz] = [s[0], s[1], s[2], s[3], s[4], s[5]];
+            (0.5 * ((xx - yy).powi(2) + (yy - zz).powi(2) + (zz - xx).powi(2)) + 3.0 * (xy * xy + yz * yz + xz * xz))
+                .sqrt()
+        })
+        .collect()
 }
 
 /// Per node: contact status (0 off Γ_C or clamped, 1 stick, 2 slip) and the friction stress ξ
@@ -61,4 +74,24 @@ pub fn nodal_contact_fields(problem: &Problem, rows: &[ContactRow]) -> (Vec<f64>
         friction[row.node * d..(row.node + 1) * d].copy_from_slice(&xi[..d]);
     }
     (status, friction)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hydrostatic stress has no von Mises part; a pure shear τ has √3 τ; a uniaxial σ has σ.
+    #[test]
+    fn von_mises_of_known_states() {
+        let states = [
+            [-4.0, -4.0, -4.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 2.0, 0.0, 0.0],
+            [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+        ];
+        let vm = von_mises(&states.concat());
+        let expected = [0.0, 3f64.sqrt() * 2.0, 5.0];
+        for (v, e) in vm.iter().zip(expected) {
+            assert!((v - e).abs() < 1e-14, "{v} against {e}");
+        }
+    }
 }

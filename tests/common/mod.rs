@@ -22,6 +22,7 @@ pub fn paper_material() -> Material {
         elasticity: Isotropic::elasticity(10_000.0, 0.3),
         expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
         conductivity: 0.5,
+        reference_temperature: 0.0,
     }
 }
 
