@@ -349,6 +349,18 @@ pub struct Traction {
 }
 
 impl Traction {
+    /// The keys the entry sets, as a user would list them: "{part, constant}".
+    fn given_keys(&self) -> String {
+        let given = [
+            ("part", true),
+            ("value", self.value.is_some()),
+            ("constant", self.constant.is_some()),
+            ("rate", self.rate.is_some()),
+        ];
+        let names: Vec<&str> = given.iter().filter(|(_, set)| *set).map(|(name, _)| *name).collect();
+        format!("{{{}}}", names.join(", "))
+    }
+
     /// The traction as one datum form; errors name `key`.
     fn datum_spec(&self, key: &str) -> Result<DatumSpec, Error> {
         match (&self.value, &self.constant, &self.rate) {
@@ -357,11 +369,11 @@ impl Traction {
                 constant: constant.clone(),
                 rate: rate.clone(),
             })),
-            _ => Err(invalid(
-                key,
-                &format!("{self:?}"),
-                "either `value` or both `constant` and `rate`",
-            )),
+            _ => Err(Error::InvalidValue {
+                key: key.to_string(),
+                value: self.given_keys(),
+                expected: "either `value` or both `constant` and `rate`".to_string(),
+            }),
         }
     }
 }
