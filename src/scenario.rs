@@ -432,8 +432,10 @@ pub struct SolverSpec {
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     pub times: Vec<f64>,
+    pub every: usize,
     pub checkpoint_every: usize,
     pub vtk: bool,
+    pub compress: bool,
     pub csv: bool,
 }
 
@@ -727,11 +729,14 @@ impl Scenario {
             ));
         }
         for &t in &self.output.times {
-            if !(t > 0.0 && t <= self.time.final_time * (1.0 + 1e-12)) {
+            if !(t >= 0.0 && t <= self.time.final_time * (1.0 + 1e-12)) {
                 return Err(invalid(
                     "output.times",
                     &t,
-                    &format!("times in (0, T] with T = time.final_time = {}", self.time.final_time),
+                    &format!(
+                        "times in [0, T] (0: the initial state) with T = time.final_time = {}",
+                        self.time.final_time
+                    ),
                 ));
             }
         }
@@ -823,16 +828,21 @@ impl Scenario {
         }
     }
 
-    /// Time levels n (1 ≤ n ≤ N) of the output times, each rounded to the nearest level, sorted
-    /// and without repeats.
+    /// Time levels n (0 ≤ n ≤ N) of the output: the output times, each rounded to the nearest
+    /// level (a time that rounds to 0 is the initial state), and every `output.every`-th level;
+    /// sorted and without repeats.
     pub fn output_steps(&self) -> Vec<usize> {
         let k = self.time_step();
+        let n_steps = self.time.steps;
         let mut steps: Vec<usize> = self
             .output
             .times
             .iter()
-            .map(|&t| ((t / k).round() as usize).clamp(1, self.time.steps))
+            .map(|&t| ((t / k).round() as usize).min(n_steps))
             .collect();
+        if let Some(frames) = n_steps.checked_div(self.output.every) {
+            steps.extend((1..=frames).map(|i| i * self.output.every));
+        }
         steps.sort_unstable();
         steps.dedup();
         steps
@@ -957,6 +967,7 @@ impl Scenario {
         OutputPlan {
             steps: self.output_steps(),
             vtk: self.output.vtk,
+            compress: self.output.compress,
             csv: self.output.csv,
             slip_tolerance: self.solver.slip_tolerance,
             record: Some(self.to_toml()),

@@ -333,3 +333,71 @@ fn initial_fields_come_from_a_checkpoint_of_the_same_mesh() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The arrays of a `.vtu` as vtkio reads them back, by name (point arrays, then cell arrays).
+fn vtu_arrays(path: &Path) -> Vec<(String, Vec<f64>)> {
+    use vtkio::model::{Attribute, DataSet, Vtk};
+    let vtk = Vtk::import(path).unwrap();
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("{} is not an unstructured grid", path.display())
+    };
+    let piece = pieces[0].load_piece_data(None).unwrap();
+    let attributes = piece.data.point.iter().chain(&piece.data.cell);
+    attributes
+        .filter_map(|a| match a {
+            Attribute::DataArray(d) => Some((d.name.clone(), d.data.clone().into_vec::<f64>().unwrap())),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Output levels: the times (0 is the initial state) and every `output.every`-th level; the
+/// initial frame holds u₀, θ₀; compressed frames hold the values of uncompressed ones, exactly,
+/// in half the bytes or less.
+#[test]
+fn frames_at_the_initial_state_every_nth_step_and_compressed() {
+    let every = coarse(&["time.steps=8", "output.times=[0.0, 0.3]", "output.every=3"]);
+    assert_eq!(every.output_steps(), vec![0, 2, 3, 6]);
+    let (dir, raw_dir) = (scratch("every"), scratch("every-raw"));
+    let problem = every.build().unwrap();
+    let run = driver::run(&problem, &every.solver_params(), &every.output_plan(), &options(&dir)).unwrap();
+    let levels: Vec<usize> = run.outputs.iter().map(|o| o.n).collect();
+    assert_eq!(levels, vec![0, 2, 3, 6]);
+    let names = vtu_files(&dir);
+    assert_eq!(
+        names,
+        [
+            "solution_0000.vtu",
+            "solution_0002.vtu",
+            "solution_0003.vtu",
+            "solution_0006.vtu"
+        ]
+    );
+    assert_eq!(pvd_files(&dir), names);
+
+    let initial = vtu_arrays(&dir.join("solution_0000.vtu"));
+    let field = |name: &str| &initial.iter().find(|(n, _)| n == name).unwrap().1;
+    assert!(field("temperature").iter().all(|&t| t == 25.0), "θ₀ = 25");
+    assert!(field("displacement").iter().all(|&u| u == 0.0), "u₀ = 0");
+
+    let raw = coarse(&[
+        "time.steps=8",
+        "output.times=[0.0, 0.3]",
+        "output.every=3",
+        "output.compress=false",
+    ]);
+    driver::run(&problem, &raw.solver_params(), &raw.output_plan(), &options(&raw_dir)).unwrap();
+    for name in &names {
+        let (zipped, plain) = (dir.join(name), raw_dir.join(name));
+        assert_eq!(vtu_arrays(&zipped), vtu_arrays(&plain), "{name}");
+        let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+        assert!(
+            2 * size(&zipped) < size(&plain) + 2048,
+            "{name}: {} against {}",
+            size(&zipped),
+            size(&plain)
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&raw_dir).unwrap();
+}

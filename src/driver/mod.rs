@@ -30,7 +30,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::error::Error;
 use crate::output::checkpoint::{self, Checkpoint, CheckpointError, Identity};
 use crate::output::folder::{Existing, RunFolder};
-use crate::output::{self, fields, Field, Grid, PvdEntry};
+use crate::output::{self, fields, Compression, Field, Grid, PvdEntry};
 use crate::problem::Problem;
 use crate::solver::system::{State, StepSystem};
 use crate::solver::{SolverParams, StepInfo};
@@ -84,6 +84,8 @@ pub struct OutputPlan {
     pub steps: Vec<usize>,
     /// Write a `.vtu` per output time and a `.pvd` collection.
     pub vtk: bool,
+    /// zlib-compress the `.vtu` arrays ([`output::Compression`]).
+    pub compress: bool,
     /// Write a contact CSV per output time.
     pub csv: bool,
     /// A contact node slips when |w_τ| exceeds this [m/s].
@@ -101,6 +103,7 @@ impl Default for OutputPlan {
         OutputPlan {
             steps: Vec::new(),
             vtk: true,
+            compress: true,
             csv: true,
             slip_tolerance: 1e-6,
             record: None,
@@ -314,6 +317,8 @@ pub fn run_observed(
     }
 
     let n_steps = problem.time.steps;
+    // Looked up every step: a set, since `output.every = 1` makes it as long as the run.
+    let output_levels: std::collections::BTreeSet<usize> = plan.steps.iter().copied().collect();
     let terminal = options.progress && std::io::stderr().is_terminal();
     let bar = if terminal {
         ProgressBar::new(n_steps as u64)
@@ -341,6 +346,17 @@ pub fn run_observed(
     let mut last_line = Instant::now();
 
     let mut output_time = 0.0;
+    // The initial state is a frame when an output time rounds to level 0 (a continued run has
+    // it already).
+    if first.n == 0 && output_levels.contains(&0) {
+        let clock = Instant::now();
+        let record = record(problem, &first, plan.slip_tolerance);
+        if let Some(files) = &files {
+            files.frame(&first, &record, &mut tally)?;
+        }
+        tally.outputs.push(record);
+        output_time += clock.elapsed().as_secs_f64();
+    }
     let loop_clock = Instant::now();
     let mut step_clock = Instant::now();
     let marched = time::march_from(problem, &levels, first, |state, info| {
@@ -377,7 +393,7 @@ pub fn run_observed(
         }
         bar.inc(1);
         let clock = Instant::now();
-        let is_output = plan.steps.contains(&state.n);
+        let is_output = output_levels.contains(&state.n);
         if is_output {
             let record = record(problem, state, plan.slip_tolerance);
             bar.set_message(format!(
@@ -455,7 +471,7 @@ pub fn run_observed(
                     if state.n > 0 {
                         files.checkpoint(&state, &tally)?;
                     }
-                    if !plan.steps.contains(&state.n) {
+                    if !output_levels.contains(&state.n) {
                         let record = record(problem, &state, plan.slip_tolerance);
                         files.frame(&state, &record, &mut tally)?;
                     }
@@ -627,7 +643,12 @@ fn write_snapshot(
                 values: &von_mises,
             },
         ];
-        output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields)?;
+        let compression = if plan.compress {
+            Compression::Zlib
+        } else {
+            Compression::None
+        };
+        output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields, compression)?;
         pvd.push(PvdEntry { time: record.t, file });
     }
     Ok(())

@@ -19,7 +19,7 @@ pub mod vtk;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use csv::{csv_bytes, write_csv};
-pub use vtk::{vtu_bytes, write_pvd, write_vtu, Field, Grid, PvdEntry};
+pub use vtk::{vtu_bytes, write_pvd, write_vtu, Compression, Field, Grid, PvdEntry};
 
 /// Errors of the output layer.
 #[derive(Debug, thiserror::Error)]
