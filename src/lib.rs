@@ -35,7 +35,7 @@
 //! | μ(r) S | `bound` | friction bound at slip rate r |
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
-//! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of MODEL.md |
+//! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of docs/model.md |
 //!
 //! ## Module map
 //!

@@ -24,7 +24,7 @@ impl Isotropic {
     /// The paper's elasticity (ℬε)_αβ = Eκ/((1+κ)(1−2κ)) tr ε δ_αβ + E/(1+κ) ε_αβ.
     ///
     /// This is the plane-strain (and 3D) Lamé form; the paper's text says "plane stress" but
-    /// writes this tensor, and we use the tensor as written (MODEL.md §4).
+    /// writes this tensor, and we use the tensor as written (docs/model.md §4).
     pub fn elasticity(young: f64, poisson: f64) -> Self {
         Isotropic {
             lambda: young * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson)),

@@ -10,7 +10,7 @@ use super::sparse::{ColumnsMut, CscMatrix, NodeGraph};
 use crate::material::{Isotropic, Material};
 use crate::mesh::Mesh;
 
-/// The P1 matrices of MODEL.md §2 on full nodal dofs.
+/// The P1 matrices of docs/model.md §2 on full nodal dofs.
 #[derive(Debug, Clone)]
 pub struct Matrices {
     /// ℳ: consistent mass with density ρ, vector.

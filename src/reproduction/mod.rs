@@ -1,5 +1,5 @@
 //! The paper's Section 6 reproduced: its Figures 2 and 3 regenerated from a scenario, and the
-//! study that settles the open points of MODEL.md §4 ([`study`]).
+//! study that settles the open points of docs/model.md §4 ([`study`]).
 //!
 //! ```text
 //! thermocontact figures   → record_run(scenario) and two runs at α_exp = 1·10⁻⁴, 1·10⁻³

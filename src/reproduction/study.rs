@@ -1,4 +1,4 @@
-//! The study that settles the open points of MODEL.md §4 by evidence: the paper's example run
+//! The study that settles the open points of docs/model.md §4 by evidence: the paper's example run
 //! for both readings of the boundary temperature θ_D, several meshes and time steps, and the
 //! three α_exp of Figs. 2–3; slip counts tabulated against the paper's; the slip tolerance
 //! checked against the gap between stick and slip rates; the temperature range checked against
