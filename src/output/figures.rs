@@ -14,7 +14,7 @@
 //! so a curved Γ_C or one of several parts gets arrows along the curve at even arc-length steps.
 //!
 //! A figure is drawn once per backend from the same code ([`Figure::draw`]); [`render`] makes the
-//! PNG bytes and the SVG text in memory and [`write`] stores both atomically.
+//! PNG bytes and the SVG text in memory and [`write()`] stores both atomically.
 
 use std::path::{Path, PathBuf};
 

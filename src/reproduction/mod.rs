@@ -218,7 +218,7 @@ pub struct FiguresMade {
     pub main: Summary,
     /// The Fig. 3 runs: (α_exp, summary).
     pub expansions: Vec<(f64, Summary)>,
-    /// Wall time of the whole command [s].
+    /// Wall time of the whole command \[s\].
     pub wall_time: f64,
 }
 

@@ -119,13 +119,13 @@ pub struct Case {
 #[derive(Debug, Clone, Serialize)]
 pub struct CaseResult {
     pub case: Case,
-    /// Output times t [s].
+    /// Output times t \[s\].
     pub times: Vec<f64>,
     /// Slip nodes at the output times (the scenario's slip tolerance).
     pub slip_nodes: Vec<usize>,
     /// Frictional contact nodes.
     pub contact_nodes: usize,
-    /// Length [m] of Γ_C from its end at the largest x·τ (the free end x = L₁ of the example)
+    /// Length \[m\] of Γ_C from its end at the largest x·τ (the free end x = L₁ of the example)
     /// to the farthest slip node; 0 without slip.
     pub slip_zone: Vec<f64>,
     /// min θ and max θ over Ω [°C].
@@ -135,7 +135,7 @@ pub struct CaseResult {
     pub recount: Vec<Vec<usize>>,
     /// Stick/slip gap in |w_τ| over all steps.
     pub separation: Separation,
-    /// Wall time of the run [s].
+    /// Wall time of the run \[s\].
     pub wall_time: f64,
 }
 
@@ -167,7 +167,7 @@ pub struct Study {
     pub cases: Vec<CaseResult>,
     /// (what was changed, result) on the base mesh.
     pub diagnostics: Vec<(String, CaseResult)>,
-    /// Wall time of all runs [s].
+    /// Wall time of all runs \[s\].
     pub wall_time: f64,
 }
 
