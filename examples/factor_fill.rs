@@ -80,10 +80,10 @@ fn main() -> anyhow::Result<()> {
         peak_memory()
     );
     anyhow::ensure!(
-        system.matrix.nnz() == 2 * nnz_lower - n,
+        system.matrix().nnz() == 2 * nnz_lower - n,
         "the pattern above ({}) is not the step matrix's ({})",
         2 * nnz_lower - n,
-        system.matrix.nnz()
+        system.matrix().nnz()
     );
     Ok(())
 }

@@ -574,7 +574,11 @@ fn print_summary(s: &Summary) {
     );
     println!("{:<34} {:>12}", "inner iterations (Uzawa / sweeps)", s.inner_iterations);
     println!("{:<34} {:>12}", "semismooth Newton iterations", s.newton_iterations);
-    println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
+    if s.linear == "iterative" {
+        println!("{:<34} {:>12}", "Krylov iterations (GMRES)", s.krylov_iterations);
+    } else {
+        println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
+    }
     if s.descent_steps > 0 {
         println!(
             "{:<34} {:>12}",
@@ -594,8 +598,12 @@ fn print_summary(s: &Summary) {
     );
     println!();
     println!("{:<34} {:>10.3} s", "assembly", t.assembly);
-    println!("{:<34} {:>10.3} s", "factorization", t.factorization);
-    println!("{:<34} {:>10.3} s", "solver set-up (condensation)", t.solver_setup);
+    if s.linear == "iterative" {
+        println!("{:<34} {:>10.3} s", "ILU(0) preconditioner", t.factorization);
+    } else {
+        println!("{:<34} {:>10.3} s", "factorization", t.factorization);
+        println!("{:<34} {:>10.3} s", "solver set-up (condensation)", t.solver_setup);
+    }
     println!("{:<34} {:>10.3} s", "time stepping", t.time_stepping);
     println!(
         "{:<34} {:>10.3} s",

@@ -18,8 +18,9 @@ use crate::loads::{Datum, Expression};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
 use crate::problem::{InitialFields, LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use crate::solver::krylov::KrylovParams;
 use crate::solver::system::State;
-use crate::solver::{SolverKind, SolverParams};
+use crate::solver::{LinearKind, SolverKind, SolverParams};
 
 /// The deepest cutback a scenario may ask for: 2^20 substeps of one step is already a
 /// different time grid, not a rescue.
@@ -426,6 +427,9 @@ pub struct SolverSpec {
     pub cutback: bool,
     pub max_cutback_depth: usize,
     pub slip_tolerance: f64,
+    pub linear: LinearKind,
+    pub krylov_tolerance: f64,
+    pub max_krylov: usize,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -720,6 +724,21 @@ impl Scenario {
             ));
         }
         non_negative("solver.slip_tolerance", s.slip_tolerance)?;
+        if !(s.krylov_tolerance > 0.0 && s.krylov_tolerance < 1.0) {
+            return Err(invalid(
+                "solver.krylov_tolerance",
+                &s.krylov_tolerance,
+                "a relative residual in (0, 1)",
+            ));
+        }
+        at_least_one("solver.max_krylov", s.max_krylov)?;
+        if s.kind == SolverKind::Paper && s.linear == LinearKind::Iterative {
+            return Err(invalid(
+                "solver.linear",
+                &"iterative",
+                "\"direct\" or \"auto\" with solver.kind = \"paper\" (the paper's solver works on the condensed problem, which needs the direct factor)",
+            ));
+        }
 
         if self.output.times.len() > MAX_OUTPUT_TIMES {
             return Err(invalid(
@@ -959,6 +978,12 @@ impl Scenario {
             max_sweeps: s.max_sweeps,
             cutback: s.cutback,
             max_cutback_depth: s.max_cutback_depth,
+            linear: s.linear,
+            krylov: KrylovParams {
+                rtol: s.krylov_tolerance,
+                max_iterations: s.max_krylov,
+                ..KrylovParams::default()
+            },
         }
     }
 

@@ -19,10 +19,12 @@ use serde::Serialize;
 use crate::error::Error;
 use crate::problem::Problem;
 use crate::solver::fast::FastSolver;
+use crate::solver::matrix::StepMatrix;
 use crate::solver::newton::NewtonParams;
+use crate::solver::newton_krylov::{KrylovSystem, NewtonKrylov};
 use crate::solver::paper::{PaperParams, PaperSolver};
 use crate::solver::system::{norm2, State, StepSystem, SystemStats};
-use crate::solver::{SolveError, SolverKind, SolverParams, StepInfo};
+use crate::solver::{LinearKind, SolveError, SolverKind, SolverParams, StepInfo};
 
 /// The contact state at one node of Γ_C.
 #[derive(Debug, Clone, Serialize)]
@@ -99,18 +101,53 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
         .collect()
 }
 
-/// A nonsmooth solver of one time step, chosen by [`SolverParams::kind`], with the factored
-/// step matrix of its step size.
+/// The linear part of a step, set up once per step size: factored (direct path) or ordered
+/// and preconditioned (iterative path), as [`SolverParams::linear`] resolves for the problem.
+pub enum LinearSystem {
+    /// The LDLᵀ factor of the step matrix.
+    Direct(StepSystem),
+    /// The step matrix with its ILU(0), for GMRES.
+    Iterative(KrylovSystem),
+}
+
+impl LinearSystem {
+    /// Assembles the step matrix of step size k and factors or preconditions it.
+    pub fn new(problem: &Problem, k: f64, params: &SolverParams) -> Result<Self, Error> {
+        let operator = StepMatrix::assemble(problem, k);
+        let unknowns = operator.matrix.n_rows;
+        Ok(match params.linear.resolve(problem.dim(), unknowns, params.kind) {
+            LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, operator, params.krylov)?),
+            _ => LinearSystem::Direct(StepSystem::factored(problem, operator)?),
+        })
+    }
+}
+
+/// A nonsmooth solver of one time step, chosen by [`SolverParams::kind`] and
+/// [`SolverParams::linear`], with the linear system of its step size.
 pub enum StepSolver<'a> {
     /// The paper's convexification + augmented Lagrangian.
     Paper(PaperSolver<'a>),
     /// Semismooth Newton on the condensed problem.
     Fast(FastSolver<'a>),
+    /// Newton on all unknowns with Krylov solves (the iterative path).
+    NewtonKrylov(NewtonKrylov<'a>),
 }
 
 impl<'a> StepSolver<'a> {
-    /// Sets the chosen solver up on a factored step matrix (the condensation onto Γ_C).
-    pub fn new(problem: &'a Problem, system: StepSystem, params: &SolverParams) -> Result<Self, Error> {
+    /// Sets the chosen solver up on a linear system (on the direct path: the condensation onto
+    /// Γ_C).
+    pub fn new(problem: &'a Problem, linear: LinearSystem, params: &SolverParams) -> Result<Self, Error> {
+        let system = match linear {
+            LinearSystem::Direct(system) => system,
+            LinearSystem::Iterative(system) => {
+                return Ok(StepSolver::NewtonKrylov(NewtonKrylov::new(
+                    problem,
+                    system,
+                    params.tolerance,
+                    params.max_convexification,
+                )))
+            }
+        };
         let paper_params = PaperParams {
             tolerance: params.tolerance,
             max_convexification: params.max_convexification,
@@ -138,14 +175,48 @@ impl<'a> StepSolver<'a> {
         match self {
             StepSolver::Paper(solver) => solver.step(previous, t),
             StepSolver::Fast(solver) => solver.step(previous, t),
+            StepSolver::NewtonKrylov(solver) => solver.step(previous, t),
         }
     }
 
-    /// The factored step matrix.
-    pub fn system(&self) -> &StepSystem {
+    /// The factored step matrix of the direct path (`None` on the iterative path).
+    pub fn direct(&self) -> Option<&StepSystem> {
         match self {
-            StepSolver::Paper(solver) => solver.system(),
-            StepSolver::Fast(solver) => solver.system(),
+            StepSolver::Paper(solver) => Some(solver.system()),
+            StepSolver::Fast(solver) => Some(solver.system()),
+            StepSolver::NewtonKrylov(_) => None,
+        }
+    }
+
+    /// Which path the solver is on.
+    pub fn linear(&self) -> LinearKind {
+        match self {
+            StepSolver::NewtonKrylov(_) => LinearKind::Iterative,
+            _ => LinearKind::Direct,
+        }
+    }
+
+    /// The step size k of its linear system.
+    pub fn step_size(&self) -> f64 {
+        match self {
+            StepSolver::NewtonKrylov(solver) => solver.system().step_size(),
+            direct => direct.direct().expect("a direct solver").step_size(),
+        }
+    }
+
+    /// Stored entries of the factor: the LDLᵀ's, or the ILU(0)'s on the iterative path.
+    pub fn factor_nnz(&self) -> usize {
+        match self {
+            StepSolver::NewtonKrylov(solver) => solver.system().factor_nnz(),
+            direct => direct.direct().expect("a direct solver").factor_nnz(),
+        }
+    }
+
+    /// The linear system's work counters.
+    pub fn stats(&self) -> SystemStats {
+        match self {
+            StepSolver::NewtonKrylov(solver) => solver.system().stats(),
+            direct => direct.direct().expect("a direct solver").stats(),
         }
     }
 }
@@ -167,7 +238,7 @@ impl<'a> Levels<'a> {
     pub fn new(problem: &'a Problem, params: &SolverParams, first: StepSolver<'a>) -> Self {
         let depth = if params.cutback { params.max_cutback_depth } else { 0 };
         let levels: Vec<OnceCell<StepSolver<'a>>> = (0..=depth).map(|_| OnceCell::new()).collect();
-        let setup_stats = Cell::new(first.system().stats());
+        let setup_stats = Cell::new(first.stats());
         let _ = levels[0].set(first);
         Levels {
             problem,
@@ -180,8 +251,8 @@ impl<'a> Levels<'a> {
 
     /// Sets up level 0 (factorization and condensation) and the empty deeper levels.
     pub fn build(problem: &'a Problem, params: &SolverParams) -> Result<Self, Error> {
-        let system = StepSystem::new(problem)?;
-        Ok(Levels::new(problem, params, StepSolver::new(problem, system, params)?))
+        let linear = LinearSystem::new(problem, problem.time_step(), params)?;
+        Ok(Levels::new(problem, params, StepSolver::new(problem, linear, params)?))
     }
 
     /// The deepest level a cutback may use.
@@ -197,13 +268,12 @@ impl<'a> Levels<'a> {
         }
         let clock = Instant::now();
         let k = self.problem.time_step() / (1u64 << depth) as f64;
-        let system = StepSystem::with_step(self.problem, k)?;
-        let solver = StepSolver::new(self.problem, system, &self.params)?;
+        let linear = LinearSystem::new(self.problem, k, &self.params)?;
+        let solver = StepSolver::new(self.problem, linear, &self.params)?;
         let solver = cell.get_or_init(|| solver);
         self.setup_seconds
             .set(self.setup_seconds.get() + clock.elapsed().as_secs_f64());
-        self.setup_stats
-            .set(self.setup_stats.get().plus(solver.system().stats()));
+        self.setup_stats.set(self.setup_stats.get().plus(solver.stats()));
         Ok(solver)
     }
 
@@ -223,7 +293,7 @@ impl<'a> Levels<'a> {
         self.levels
             .iter()
             .filter_map(|cell| cell.get())
-            .map(|solver| solver.system().stats())
+            .map(|solver| solver.stats())
             .fold(SystemStats::default(), SystemStats::plus)
             .since(self.setup_stats.get())
     }

@@ -22,12 +22,12 @@ fn iterative_and_direct_solves_agree_on_a_3d_step_matrix() {
         let problem = Scenario::load_file(&path, &overrides).unwrap().build().unwrap();
         let system = StepSystem::new(&problem).unwrap();
         let n_w = system.n_w();
-        let direct = DirectSolver::new(&system.matrix, n_w).unwrap();
+        let direct = DirectSolver::new(system.matrix(), n_w).unwrap();
         let params = KrylovParams {
             rtol: 1e-12,
             ..KrylovParams::default()
         };
-        let iterative = IterativeSolver::new(&system.matrix, n_w, params).unwrap();
+        let iterative = IterativeSolver::new(system.matrix(), n_w, params).unwrap();
 
         // The first step's right-hand side, and a unit tangential load at a contact node.
         let k = problem.time_step();

@@ -6,7 +6,7 @@ use thermocontact::contact::friction::law_residual;
 use thermocontact::solver::condensed::Condensation;
 use thermocontact::solver::system::{add_contact_terms, tangential_velocities, State, StepSystem};
 use thermocontact::solver::{Criterion, SolveError};
-use thermocontact::time::{contact_rows, StepSolver};
+use thermocontact::time::{contact_rows, LinearSystem, StepSolver};
 use thermocontact::Scenario;
 
 fn coarse(overrides: &[&str]) -> Scenario {
@@ -23,7 +23,7 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
     let scenario = coarse(&["friction.bound=0.0", "material.thermal_expansion=0.0"]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
+    let solver = StepSolver::new(&problem, LinearSystem::Direct(system), &scenario.solver_params()).unwrap();
     let (state, _) = solver.step(&State::initial(&problem), problem.time_step()).unwrap();
 
     let k = problem.time_step();
@@ -95,7 +95,7 @@ fn default_scenario_on_a_coarse_mesh_satisfies_the_friction_law() {
     let scenario = coarse(&[]);
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
+    let solver = StepSolver::new(&problem, LinearSystem::Direct(system), &scenario.solver_params()).unwrap();
     let mut state = State::initial(&problem);
     let tol = scenario.solver.slip_tolerance;
     let mut slipped = 0;
@@ -142,7 +142,7 @@ fn non_convergence_names_the_failed_criterion_and_its_value() {
         ]);
         let problem = scenario.build().unwrap();
         let system = StepSystem::new(&problem).unwrap();
-        let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
+        let solver = StepSolver::new(&problem, LinearSystem::Direct(system), &scenario.solver_params()).unwrap();
         let mut state = State::initial(&problem);
         let failure = loop {
             match solver.step(&state, state.t + problem.time_step()) {

@@ -12,7 +12,7 @@ use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLa
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::solver::system::{State, StepSystem};
-use thermocontact::time::{contact_rows, StepSolver};
+use thermocontact::time::{contact_rows, LinearSystem, StepSolver};
 use thermocontact::Scenario;
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
@@ -187,7 +187,7 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
     .unwrap();
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
-    let solver = StepSolver::new(&problem, system, &scenario.solver_params()).unwrap();
+    let solver = StepSolver::new(&problem, LinearSystem::Direct(system), &scenario.solver_params()).unwrap();
     let law = problem.friction.as_ref();
     let tol = scenario.solver.slip_tolerance;
     let mut state = State::initial(&problem);

@@ -54,7 +54,7 @@ fn main() -> anyhow::Result<()> {
     let scenario = Scenario::load(None, &overrides)?;
     let problem = scenario.build()?;
     let system = StepSystem::new(&problem)?;
-    let s = &system.matrix;
+    let s = system.matrix();
     let (n, n_w) = (s.n_rows, system.n_w());
     println!(
         "S: {n} unknowns ({n_w} velocity + {} temperature), nnz(S) {}, rayon threads {}",

@@ -54,7 +54,7 @@ fn main() -> anyhow::Result<()> {
         "{}D: {n} unknowns, {} contact unknowns last (from position {t0}), nnz(S) {}",
         problem.dim(),
         n - t0,
-        system.matrix.nnz()
+        system.matrix().nnz()
     );
     let SymbolicCholeskyRaw::Supernodal(sn) = factor.symbolic().raw() else {
         anyhow::bail!("expected a supernodal factor");
@@ -87,9 +87,9 @@ fn main() -> anyhow::Result<()> {
             })
             .fold(f64::INFINITY, f64::min)
     };
-    let last_s = best_of_three(&|| QuasiDefiniteLdlt::with_trailing(&system.matrix, &contact).unwrap());
-    let amd_s = best_of_three(&|| QuasiDefiniteLdlt::new(&system.matrix).unwrap());
-    let amd = QuasiDefiniteLdlt::new(&system.matrix)?;
+    let last_s = best_of_three(&|| QuasiDefiniteLdlt::with_trailing(system.matrix(), &contact).unwrap());
+    let amd_s = best_of_three(&|| QuasiDefiniteLdlt::new(system.matrix()).unwrap());
+    let amd = QuasiDefiniteLdlt::new(system.matrix())?;
     println!(
         "AMD on all unknowns: nnz(L) {} (contact last: {:+.1} %); factorization {:.3} s (contact last: {:.3} s)",
         amd.factor_nnz(),
@@ -117,7 +117,7 @@ fn main() -> anyhow::Result<()> {
         moved_inv[i] = p;
     }
     let symbolic = factorize_symbolic_cholesky(
-        system.matrix.to_faer().symbolic(),
+        system.matrix().to_faer().symbolic(),
         Side::Lower,
         SymmetricOrdering::Custom(PermRef::new_checked(&moved, &moved_inv, n)),
         CholeskySymbolicParams {

@@ -4,7 +4,7 @@
 //! for output, checkpoints, progress, logs and timings.
 //!
 //! ```text
-//! claim the folder → factor (StepSystem::new) → set the solver up → steps (time::march_from)
+//! claim the folder → factor or precondition (time::LinearSystem::new) → set the solver up → steps (time::march_from)
 //!   each step: steps.csv record, log line; output steps: frames, solution.pvd rewritten;
 //!   every `checkpoint_every` steps: checkpoint.bin, steps.csv, summary.json ("running")
 //! → summary.json ("completed", or "failed" / "interrupted" with the last state written)
@@ -32,9 +32,9 @@ use crate::output::checkpoint::{self, Checkpoint, CheckpointError, Identity};
 use crate::output::folder::{Existing, RunFolder};
 use crate::output::{self, fields, Compression, Field, Grid, PvdEntry};
 use crate::problem::Problem;
-use crate::solver::system::{State, StepSystem};
-use crate::solver::{SolverParams, StepInfo};
-use crate::time::{self, contact_rows, ContactRow, Levels, StepSolver, Stopped};
+use crate::solver::system::State;
+use crate::solver::{LinearKind, SolverParams, StepInfo};
+use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolver, Stopped};
 
 pub use stop::StopFlag;
 pub use summary::{CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings};
@@ -141,6 +141,8 @@ struct Setup<'a> {
     params: &'a SolverParams,
     plan: &'a OutputPlan,
     factor_nnz: usize,
+    /// The linear path taken.
+    linear: LinearKind,
 }
 
 impl Setup<'_> {
@@ -165,6 +167,8 @@ impl Setup<'_> {
             fallback_steps: tally.fallback_steps,
             descent_steps: tally.descent_steps,
             descent_sweeps: tally.descent_sweeps,
+            krylov_iterations: tally.krylov_iterations,
+            linear: self.linear.name().to_string(),
             linear_solves: 0,
             full_sweeps: 0,
             factor_nnz: self.factor_nnz,
@@ -291,17 +295,18 @@ pub fn run_observed(
     };
 
     let clock = Instant::now();
-    let system = StepSystem::new(problem)?;
+    let linear = LinearSystem::new(problem, problem.time_step(), params)?;
     timings.factorization = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let levels = Levels::new(problem, params, StepSolver::new(problem, system, params)?);
+    let levels = Levels::new(problem, params, StepSolver::new(problem, linear, params)?);
     timings.solver_setup = clock.elapsed().as_secs_f64();
     let setup = Setup {
         problem,
         params,
         plan,
-        factor_nnz: levels.first().system().factor_nnz(),
+        factor_nnz: levels.first().factor_nnz(),
+        linear: levels.first().linear(),
     };
 
     if let Some(files) = &files {
@@ -369,6 +374,7 @@ pub fn run_observed(
             inner_iterations: info.inner_iterations,
             newton_iterations: info.newton_iterations,
             descent_sweeps: info.descent_sweeps,
+            krylov_iterations: info.krylov_iterations,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             law_residual: residual,

@@ -93,8 +93,13 @@ pub struct Summary {
     /// Triangular sweeps over all of the factor in the time loop (forward or backward; a full
     /// solve counts two).
     pub full_sweeps: usize,
-    /// Stored entries of the LDLᵀ factor of the step matrix.
+    /// Stored entries of the LDLᵀ factor of the step matrix (direct path), or of its ILU(0)
+    /// factor (iterative path).
     pub factor_nnz: usize,
+    /// The linear path the run took: `direct` or `iterative` (`solver.linear`, `auto` resolved).
+    pub linear: String,
+    /// Krylov iterations over all linear solves (iterative path; 0 on the direct path).
+    pub krylov_iterations: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
     pub peak_memory_mib: Option<f64>,
     /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
@@ -209,6 +214,9 @@ pub struct StepRecord {
     pub inner_iterations: usize,
     pub newton_iterations: usize,
     pub descent_sweeps: usize,
+    /// Krylov iterations of the step (iterative path).
+    #[serde(default)]
+    pub krylov_iterations: usize,
     /// Substeps taken (1: no cutback) and the deepest cutback.
     pub substeps: usize,
     pub cutback_depth: usize,
@@ -220,13 +228,14 @@ pub struct StepRecord {
 
 impl StepRecord {
     /// The columns of `steps.csv`.
-    pub const HEADER: [&'static str; 10] = [
+    pub const HEADER: [&'static str; 11] = [
         "n",
         "t",
         "convexification",
         "inner",
         "newton",
         "descent_sweeps",
+        "krylov",
         "substeps",
         "cutback_depth",
         "law_residual",
@@ -242,6 +251,7 @@ impl StepRecord {
             self.inner_iterations as f64,
             self.newton_iterations as f64,
             self.descent_sweeps as f64,
+            self.krylov_iterations as f64,
             self.substeps as f64,
             self.cutback_depth as f64,
             self.law_residual,
@@ -263,6 +273,8 @@ pub struct Tally {
     pub fallback_steps: usize,
     pub descent_steps: usize,
     pub descent_sweeps: usize,
+    #[serde(default)]
+    pub krylov_iterations: usize,
     pub max_law_residual: f64,
     pub cutbacks: Vec<CutbackRecord>,
     pub outputs: Vec<OutputRecord>,
@@ -289,6 +301,7 @@ impl Tally {
         self.fallback_steps += usize::from(info.fallback);
         self.descent_steps += usize::from(info.descent_sweeps > 0);
         self.descent_sweeps += info.descent_sweeps;
+        self.krylov_iterations += info.krylov_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);
         self.steps.push(record);
     }

@@ -88,6 +88,58 @@ impl CsrMatrix {
         self.n
     }
 
+    /// P A Pᵀ of A = J S (as [`CsrMatrix::from_symmetric_form`]) for the ordering `order`:
+    /// row and column i of the result are row and column `order[i]` of A.
+    ///
+    /// # Panics
+    /// If `order` is not a permutation of S's unknowns.
+    pub fn from_symmetric_form_ordered(s: &CscMatrix, n_w: usize, order: &[usize]) -> Self {
+        assert_eq!(order.len(), s.n_cols, "an ordering of every unknown");
+        let mut position = vec![usize::MAX; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            assert_eq!(position[old], usize::MAX, "unknown {old} ordered twice");
+            position[old] = new;
+        }
+        let mut ptr = Vec::with_capacity(s.n_cols + 1);
+        let mut col = Vec::with_capacity(s.values.len());
+        let mut val = Vec::with_capacity(s.values.len());
+        let mut row: Vec<(usize, f64)> = Vec::new();
+        ptr.push(0);
+        for &old in order {
+            // Row `old` of A is column `old` of S, negated in the temperature rows.
+            let sign = if old < n_w { 1.0 } else { -1.0 };
+            let range = s.col_ptr[old]..s.col_ptr[old + 1];
+            row.clear();
+            row.extend(
+                s.row_idx[range.clone()]
+                    .iter()
+                    .zip(&s.values[range])
+                    .map(|(&c, &v)| (position[c], sign * v)),
+            );
+            row.sort_unstable_by_key(|&(c, _)| c);
+            col.extend(row.iter().map(|&(c, _)| c));
+            val.extend(row.iter().map(|&(_, v)| v));
+            ptr.push(col.len());
+        }
+        CsrMatrix {
+            n: s.n_cols,
+            ptr,
+            col,
+            val,
+        }
+    }
+
+    /// Row i: its column indices and values.
+    pub fn row(&self, i: usize) -> (&[usize], &[f64]) {
+        let range = self.ptr[i]..self.ptr[i + 1];
+        (&self.col[range.clone()], &self.val[range])
+    }
+
+    /// Row i's values, to change them in place (the pattern stays).
+    pub fn row_values_mut(&mut self, i: usize) -> &mut [f64] {
+        &mut self.val[self.ptr[i]..self.ptr[i + 1]]
+    }
+
     /// Stored entries.
     pub fn nnz(&self) -> usize {
         self.val.len()
@@ -227,6 +279,58 @@ impl Ilu0 {
             f.inv_diag.push(1.0 / val[diag[i]]);
         }
         Ok(f)
+    }
+
+    /// Factors rows `first..n` of A again after their values changed, rows before `first`
+    /// unchanged: the rows of an ILU(0) depend only on the rows above them, so a matrix whose
+    /// changing rows are ordered last is refactored in time proportional to those rows (the
+    /// contact rows of a Newton matrix, [`super::newton_krylov`]).
+    pub fn refactor_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), Error> {
+        let n = a.n;
+        let mut dense = vec![0.0; n];
+        let mut in_row = vec![false; n];
+        for i in first..n {
+            let (cols, vals) = a.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                dense[c] = v;
+                in_row[c] = true;
+            }
+            for &k in cols.iter().take_while(|&&k| k < i) {
+                let l = dense[k] * self.inv_diag[k];
+                dense[k] = l;
+                let range = self.u_ptr[k]..self.u_ptr[k + 1];
+                for (&c, &u) in self.u_col[range.clone()].iter().zip(&self.u_val[range]) {
+                    if in_row[c as usize] {
+                        dense[c as usize] -= l * u;
+                    }
+                }
+            }
+            let pivot = dense[i];
+            if pivot == 0.0 || !pivot.is_finite() {
+                return Err(Error::Factorization {
+                    stage: FactorStage::IncompleteLu,
+                    detail: format!("pivot {pivot} in row {i}"),
+                });
+            }
+            let (l_range, u_range) = (self.l_ptr[i]..self.l_ptr[i + 1], self.u_ptr[i]..self.u_ptr[i + 1]);
+            for (slot, &c) in self.l_val[l_range.clone()].iter_mut().zip(&self.l_col[l_range]) {
+                *slot = dense[c as usize];
+            }
+            for (slot, &c) in self.u_val[u_range.clone()].iter_mut().zip(&self.u_col[u_range]) {
+                *slot = dense[c as usize];
+            }
+            self.inv_diag[i] = 1.0 / pivot;
+            for &c in cols {
+                dense[c] = 0.0;
+                in_row[c] = false;
+            }
+        }
+        Ok(())
+    }
+
+    /// Stored entries of L and U (the diagonal included).
+    pub fn nnz(&self) -> usize {
+        self.l_val.len() + self.u_val.len() + self.inv_diag.len()
     }
 
     /// z = (LU)⁻¹ r.

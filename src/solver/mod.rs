@@ -10,7 +10,9 @@ pub mod descent;
 pub mod factor;
 pub mod fast;
 pub mod krylov;
+pub mod matrix;
 pub mod newton;
+pub mod newton_krylov;
 pub mod paper;
 pub mod system;
 
@@ -42,6 +44,50 @@ impl SolverKind {
     }
 }
 
+/// How the linear systems of a step are solved.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinearKind {
+    /// The LDLᵀ factor of the step matrix, the step condensed onto Γ_C ([`system`]).
+    Direct,
+    /// GMRES + ILU(0) inside a Newton method on all unknowns, nothing condensed
+    /// ([`newton_krylov`]).
+    Iterative,
+    /// [`LinearKind::Direct`] in 2D and for small 3D problems, iterative beyond
+    /// ([`LinearKind::resolve`]).
+    Auto,
+}
+
+impl LinearKind {
+    /// The name in scenarios and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            LinearKind::Direct => "direct",
+            LinearKind::Iterative => "iterative",
+            LinearKind::Auto => "auto",
+        }
+    }
+
+    /// Unknowns from which `auto` takes the iterative path in 3D (measured: README, 3D at
+    /// scale).
+    pub const AUTO_ITERATIVE_FROM: usize = 40_000;
+
+    /// Direct or iterative for a problem of `dim` dimensions and `unknowns` unknowns solved by
+    /// `kind`. `auto` is direct in 2D (the factor has only about 5× A's entries there, and one
+    /// direct solve per step beats several Krylov solves), direct in 3D below
+    /// [`Self::AUTO_ITERATIVE_FROM`] unknowns, iterative beyond (the 3D factor's fill grows like
+    /// N^{4/3}: 36× A's entries at 98k unknowns), and direct for the paper's solver, which
+    /// needs the condensation.
+    pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind) -> LinearKind {
+        match self {
+            LinearKind::Auto if kind == SolverKind::Paper || dim < 3 => LinearKind::Direct,
+            LinearKind::Auto if unknowns >= Self::AUTO_ITERATIVE_FROM => LinearKind::Iterative,
+            LinearKind::Auto => LinearKind::Direct,
+            chosen => chosen,
+        }
+    }
+}
+
 /// The step solver's settings; defaults are the paper's (ε_conv = 1e-6).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverParams {
@@ -61,6 +107,10 @@ pub struct SolverParams {
     pub cutback: bool,
     /// The deepest cutback: at most 2^depth substeps of k/2^depth.
     pub max_cutback_depth: usize,
+    /// Direct, iterative, or chosen by size.
+    pub linear: LinearKind,
+    /// Tolerance and caps of the iterative path's Krylov solves.
+    pub krylov: krylov::KrylovParams,
 }
 
 impl Default for SolverParams {
@@ -74,6 +124,8 @@ impl Default for SolverParams {
             max_sweeps: 20_000,
             cutback: true,
             max_cutback_depth: 5,
+            linear: LinearKind::Auto,
+            krylov: krylov::KrylovParams::default(),
         }
     }
 }
@@ -100,6 +152,8 @@ pub struct StepInfo {
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
     pub cutback_depth: usize,
+    /// Krylov iterations of the iterative path's linear solves (0 on the direct path).
+    pub krylov_iterations: usize,
 }
 
 impl StepInfo {
@@ -113,6 +167,7 @@ impl StepInfo {
         self.descent_sweeps += other.descent_sweeps;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
+        self.krylov_iterations += other.krylov_iterations;
     }
 }
 
@@ -137,6 +192,8 @@ pub enum Criterion {
     NodalLaw,
     /// A linear solve of the Newton method gave a non-finite update.
     NonFiniteUpdate,
+    /// ‖b − J x‖ / ‖b‖ of a Krylov solve at its iteration cap.
+    LinearResidual,
 }
 
 impl Criterion {
@@ -151,6 +208,7 @@ impl Criterion {
             Criterion::IncrementXiNodal => "max |Δξ| / max friction bound",
             Criterion::NodalLaw => "nodal friction-law residual / smallest bound",
             Criterion::NonFiniteUpdate => "non-finite Newton update",
+            Criterion::LinearResidual => "relative residual of the linear solve",
         }
     }
 }

@@ -270,7 +270,7 @@ impl CondensedStep<'_> {
 /// ∂F/∂ξ = I − (b/|q|)(I − n nᵀ), ∂F/∂w = −b'(|w|) n (w/|w|)ᵀ + (b r/|q|)(I − n nᵀ), n = q/|q|;
 /// ∂F/∂ξ is invertible because |q| > b. Where w = 0 the slip direction is taken as −n.
 #[allow(clippy::too_many_arguments)]
-fn slip_linearization(
+pub(super) fn slip_linearization(
     w: &[f64],
     xi: &[f64],
     q: &[f64],

@@ -1,15 +1,6 @@
-//! The linear part of one time step of Problem 14, factored once per run.
-//!
-//! With x = (W_n, Θ_n) on the unknowns of E^h × V^h:
-//!
-//! ```text
-//! (ℳ/k + 𝒦_A + k𝒦_B) W_n + G Θ_n   = ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n + Σ_i ℓ_i ξ_i·t
-//! −Gᵀ W_n + (ℳ_θ/k + 𝒦_θ) Θ_n       = ℳ_θ Θ_{n−1}/k + G_n + Σ_i ℓ_i h_τ(t_n, |w_i|)
-//! ```
-//!
-//! The matrix depends on k only, so it is assembled and factored once; every solver then works
-//! with right-hand sides. It is not symmetric (±G); its sign-flipped form S = J A is symmetric
-//! quasi-definite and is what gets factored ([`super::factor`]).
+//! The direct path: the step matrix of Problem 14 ([`super::matrix`]) factored once per run,
+//! its contact unknowns last, and the one-solve step skeleton the condensed solvers share
+//! ([`StepSystem::free_step`], [`StepSystem::loaded_state`]).
 
 use std::sync::Mutex;
 use std::time::Instant;
@@ -17,6 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::factor::QuasiDefiniteLdlt;
+use super::matrix::{StepMatrix, StepRhs};
 use crate::error::Error;
 use crate::fem::sparse::CscMatrix;
 use crate::problem::Problem;
@@ -71,6 +63,8 @@ pub struct SystemStats {
     pub solve_seconds: f64,
     /// Seconds building right-hand sides.
     pub rhs_seconds: f64,
+    /// Krylov iterations of the iterative path's solves (each solve counts once in `solves`).
+    pub krylov_iterations: usize,
 }
 
 impl SystemStats {
@@ -82,6 +76,7 @@ impl SystemStats {
             trailing_sweeps: self.trailing_sweeps + other.trailing_sweeps,
             solve_seconds: self.solve_seconds + other.solve_seconds,
             rhs_seconds: self.rhs_seconds + other.rhs_seconds,
+            krylov_iterations: self.krylov_iterations + other.krylov_iterations,
         }
     }
 
@@ -93,6 +88,7 @@ impl SystemStats {
             trailing_sweeps: self.trailing_sweeps - earlier.trailing_sweeps,
             solve_seconds: self.solve_seconds - earlier.solve_seconds,
             rhs_seconds: self.rhs_seconds - earlier.rhs_seconds,
+            krylov_iterations: self.krylov_iterations - earlier.krylov_iterations,
         }
     }
 
@@ -109,16 +105,14 @@ impl SystemStats {
 
 /// The factored step matrix and the right-hand side of Problem 14.
 pub struct StepSystem {
-    /// S = J A, the symmetric form of the reduced step matrix (rows of the temperature
-    /// equations negated).
-    pub matrix: CscMatrix,
+    /// S = J A, the symmetric form of the reduced step matrix.
+    matrix: CscMatrix,
+    /// The right-hand side and the state of a solution.
+    operator: StepRhs,
     /// Work counters: solves (right-hand sides) and seconds spent in them and in `rhs`.
     stats: Mutex<SystemStats>,
     factor: QuasiDefiniteLdlt,
-    /// Contributions of θ_D to the right-hand side (moved over from the matrix).
-    lift: Vec<f64>,
     n_w: usize,
-    k: f64,
 }
 
 impl StepSystem {
@@ -129,87 +123,42 @@ impl StepSystem {
 
     /// The same for a step size k of one's own (the substeps of a cut-back step).
     pub fn with_step(problem: &Problem, k: f64) -> Result<Self, Error> {
-        let (vel, temp) = (&problem.velocity, &problem.temperature);
-        let n_w = vel.n_free;
-        let n = n_w + temp.n_free;
-        let mats = &problem.matrices;
-        let theta_d = &problem.theta_dirichlet;
-        let mut lift = vec![0.0; n];
-        let mut triplets = Vec::with_capacity(mats.mass.nnz() * 2 + mats.coupling.nnz() * 2 + mats.heat_mass.nnz());
+        Self::factored(problem, StepMatrix::assemble(problem, k))
+    }
 
-        // Mechanical block ℳ/k + 𝒦_A + k𝒦_B (the three share one pattern).
-        for (idx, (row, col, _)) in mats.mass.triplets().enumerate() {
-            let value = mats.mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
-            for &(r, a) in vel.row(row) {
-                for &(c, b) in vel.row(col) {
-                    triplets.push((r, c, a * b * value));
-                }
-            }
-        }
-        // Coupling G and −Gᵀ.
-        for (row, q, g) in mats.coupling.triplets() {
-            for &(r, a) in vel.row(row) {
-                match temp.free[q] {
-                    Some(c) => {
-                        // G in the velocity rows; −(−Gᵀ) = Gᵀ in the (negated) temperature rows.
-                        triplets.push((r, n_w + c, a * g));
-                        triplets.push((n_w + c, r, a * g));
-                    }
-                    None => lift[r] += a * g * theta_d[q],
-                }
-            }
-        }
-        // Thermal block ℳ_θ/k + 𝒦_θ.
-        for (idx, (p, q, _)) in mats.heat_mass.triplets().enumerate() {
-            let value = mats.heat_mass.values[idx] / k + mats.conduction.values[idx];
-            if let Some(r) = temp.free[p] {
-                match temp.free[q] {
-                    Some(c) => triplets.push((n_w + r, n_w + c, -value)),
-                    None => lift[n_w + r] += value * theta_d[q],
-                }
-            }
-        }
-        let matrix = CscMatrix::from_triplets(n, n, triplets);
+    /// Factors an assembled step matrix, the contact unknowns last.
+    pub fn factored(problem: &Problem, operator: StepMatrix) -> Result<Self, Error> {
+        let StepMatrix { matrix, rhs: operator } = operator;
+        let n_w = operator.n_w();
         let factor = QuasiDefiniteLdlt::with_trailing(&matrix, &contact_unknowns(problem, n_w))?;
         Ok(StepSystem {
             matrix,
+            operator,
             factor,
-            lift,
             n_w,
-            k,
             stats: Mutex::new(SystemStats::default()),
         })
     }
 
+    /// S = J A, the symmetric form of the reduced step matrix.
+    pub fn matrix(&self) -> &CscMatrix {
+        &self.matrix
+    }
+
     /// The step size k the matrix was made for.
     pub fn step_size(&self) -> f64 {
-        self.k
+        self.operator.step_size()
     }
 
     /// Number of unknowns.
     pub fn n_unknowns(&self) -> usize {
-        self.matrix.n_rows
+        self.operator.n_unknowns()
     }
 
-    /// The right-hand side of step n without the contact terms:
-    /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
+    /// The right-hand side of step n without the contact terms ([`StepRhs::rhs`]).
     pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
         let clock = Instant::now();
-        let mats = &problem.matrices;
-        let mut mech = problem.force(t)?;
-        mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
-        mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
-        let mut heat = problem.heat_load(t)?;
-        mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
-
-        let mut rhs = vec![0.0; self.n_unknowns()];
-        problem.velocity.restrict_add(&mech, &mut rhs[..self.n_w]);
-        for (p, free) in problem.temperature.free.iter().enumerate() {
-            if let Some(r) = free {
-                rhs[self.n_w + r] = heat[p];
-            }
-        }
-        rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
+        let rhs = self.operator.rhs(problem, previous, t)?;
         self.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
         Ok(rhs)
     }
@@ -387,23 +336,7 @@ impl StepSystem {
 
     /// The new state at time t from the solution x of the step from `previous`.
     pub fn state_from(&self, problem: &Problem, previous: &State, t: f64, x: &[f64], xi: Vec<f64>) -> State {
-        let w = problem.velocity.prolong(&x[..self.n_w]);
-        let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
-        let theta = problem
-            .temperature
-            .free
-            .iter()
-            .zip(&problem.theta_dirichlet)
-            .map(|(free, &fixed)| free.map_or(fixed, |r| x[self.n_w + r]))
-            .collect();
-        State {
-            n: previous.n + 1,
-            t,
-            w,
-            u,
-            theta,
-            xi,
-        }
+        self.operator.state_from(problem, previous, t, x, xi)
     }
 }
 
