@@ -23,12 +23,16 @@ pub enum Error {
     },
     /// A problem too large for the machine, found before anything is allocated.
     #[error(
-        "{keys} give {unknowns:.3e} unknowns, which need about {needed} of memory (estimated for the direct \
-         factorization), but this machine has {available}: use fewer cells"
+        "{keys} give {unknowns:.3e} unknowns, which need about {needed} of memory (estimated for the {path}), \
+         but this machine has {available}: use fewer cells{hint}"
     )]
     TooLarge {
         /// The keys that set the size.
         keys: String,
+        /// What the estimate is for: `direct factorization` or `iterative solver`.
+        path: &'static str,
+        /// What else may help (the iterative path, for a direct run).
+        hint: &'static str,
         unknowns: f64,
         needed: String,
         available: String,

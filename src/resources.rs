@@ -7,13 +7,32 @@
 //! 1 300 at 47k and 2 416 at 291k, i.e. about 1 300 (N / 47 000)^{1/3}. A run's peak is about
 //! 18–28 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).
 //! The estimate is for refusing runs that cannot fit, not a promise: within 1.5× of the
-//! measured peaks.
+//! measured peaks. The iterative path ([`crate::solver::newton_krylov`]) has no fill: its
+//! memory is linear in the unknowns.
+
+use crate::solver::LinearKind;
 
 /// Bytes of peak memory per factor entry (measured: 164 MiB for 6.2 M entries in 2D, 28 bytes;
 /// 1.05 GB for 61 M in 3D with cutback levels, 18 bytes).
 const BYTES_PER_ENTRY: f64 = 24.0;
 
-/// Estimated peak memory of a run with `unknowns` unknowns in `dim` dimensions, bytes.
+/// Peak bytes per unknown of the iterative path in 3D (`solver.linear = "iterative"`): the
+/// mesh, the problem's matrices, A in CSR and its ILU(0) factor, the assembly's triplets, a
+/// few vectors; linear in N. Measured (`/usr/bin/time -v`, VmHWM): 496 MiB at 98 334
+/// unknowns, 5.3 kB per unknown.
+const ITERATIVE_BYTES_PER_UNKNOWN: f64 = 5_300.0;
+
+/// Estimated peak memory of a run with `unknowns` unknowns in `dim` dimensions on the linear
+/// path `linear` (direct or iterative, resolved), bytes.
+pub fn estimated_memory_on(dim: usize, unknowns: f64, linear: LinearKind) -> f64 {
+    match linear {
+        LinearKind::Iterative => 32.0 * (1u64 << 20) as f64 + ITERATIVE_BYTES_PER_UNKNOWN * unknowns,
+        _ => estimated_memory(dim, unknowns),
+    }
+}
+
+/// Estimated peak memory of a run on the direct path with `unknowns` unknowns in `dim`
+/// dimensions, bytes.
 pub fn estimated_memory(dim: usize, unknowns: f64) -> f64 {
     let per_unknown = if dim == 3 {
         1300.0 * (unknowns / 47_000.0).cbrt()

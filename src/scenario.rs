@@ -782,12 +782,24 @@ impl Scenario {
             (None, None) => return Ok(()),
         };
         let unknowns = (d + 1) as f64 * nodes;
-        let needed = crate::resources::estimated_memory(d, unknowns);
+        let linear = self.solver.linear.resolve(d, unknowns as usize, self.solver.kind);
+        let needed = crate::resources::estimated_memory_on(d, unknowns, linear);
         // Without /proc/meminfo, a bound no machine passes.
         let available = crate::resources::machine_memory().unwrap_or(1e15);
         if needed > available {
+            let direct = linear != LinearKind::Iterative;
             return Err(Error::TooLarge {
                 keys,
+                path: if direct {
+                    "direct factorization"
+                } else {
+                    "iterative solver"
+                },
+                hint: if direct && d == 3 {
+                    " or solver.linear = \"iterative\" (memory linear in the unknowns)"
+                } else {
+                    ""
+                },
                 unknowns,
                 needed: crate::resources::human(needed),
                 available: crate::resources::human(available),
