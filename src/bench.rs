@@ -13,6 +13,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::output;
 
+pub mod scale;
+
 /// One measured run.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BenchRow {

@@ -108,6 +108,27 @@ enum Command {
         /// case reads scenarios/paper3d.toml).
         #[arg(long)]
         hard: bool,
+        /// Run the 3D scaling suite instead: the 3D example (scenarios/paper3d.toml) with
+        /// nx × nx/4 × nx/4 cells for each nx of --cells-3d (about 47k, 98k, 291k and 972k
+        /// unknowns), --steps-3d steps of k = 1/--inverse-k each, on the iterative path and, up
+        /// to --direct-up-to, on the direct one; then the 972k case again at k = 1/8. Prints
+        /// set-up, time per step, Newton and Krylov iterations per step and peak memory with
+        /// their growth exponents, and writes bench_3d.json (minutes: the direct runs dominate).
+        #[arg(long = "3d")]
+        three_d: bool,
+        /// Cells along x of the 3D suite.
+        #[arg(long, value_delimiter = ',', default_value = "56,72,104,156")]
+        cells_3d: Vec<usize>,
+        /// Time steps of each 3D run.
+        #[arg(long, default_value_t = 4)]
+        steps_3d: usize,
+        /// 1/k of the 3D runs (64: the paper's k = 1/64).
+        #[arg(long, default_value_t = 64)]
+        inverse_k: usize,
+        /// The largest nx of the 3D suite also run on the direct path (its factor grows like
+        /// N^{4/3}: 41 s of set-up at 98k unknowns, no fit at 291k).
+        #[arg(long, default_value_t = 72)]
+        direct_up_to: usize,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -255,8 +276,15 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             steps,
             paper_up_to,
             hard,
+            three_d,
+            cells_3d,
+            steps_3d,
+            inverse_k,
+            direct_up_to,
         } => {
-            if hard {
+            if three_d {
+                bench_3d(&out, &cells_3d, steps_3d, inverse_k, direct_up_to)
+            } else if hard {
                 bench_hard(&out)
             } else {
                 bench(&out, &sizes, steps, paper_up_to)
@@ -445,6 +473,61 @@ fn bench_hard(out: &std::path::Path) -> anyhow::Result<()> {
     }
     println!("\n{}", format_hard_table(&rows));
     let path = out.join("bench_hard.json");
+    thermocontact::output::write_atomic(&path, &serde_json::to_vec_pretty(&rows)?)?;
+    println!("written to {}", path.display());
+    Ok(())
+}
+
+/// `bench --3d`: the 3D example at growing sizes on both linear paths, then the largest at
+/// k = 1/8.
+fn bench_3d(
+    out: &std::path::Path,
+    cells: &[usize],
+    steps: usize,
+    inverse_k: usize,
+    direct_up_to: usize,
+) -> anyhow::Result<()> {
+    use thermocontact::bench::scale::{format_scale_table, measure_3d};
+    let exe = std::env::current_exe()?;
+    let scenario = std::path::Path::new("scenarios/paper3d.toml");
+    anyhow::ensure!(
+        scenario.exists(),
+        "{} not found: run bench --3d from the repository root",
+        scenario.display()
+    );
+    anyhow::ensure!(
+        inverse_k > 0 && steps > 0,
+        "--inverse-k and --steps-3d must be positive"
+    );
+    std::fs::create_dir_all(out)?;
+    let k = 1.0 / inverse_k as f64;
+    let mut runs: Vec<(&str, usize, f64)> = Vec::new();
+    for &nx in cells {
+        if nx <= direct_up_to {
+            runs.push(("direct", nx, k));
+        }
+        runs.push(("iterative", nx, k));
+    }
+    if let Some(&largest) = cells.iter().max() {
+        if inverse_k != 8 {
+            runs.push(("iterative", largest, 1.0 / 8.0));
+        }
+    }
+    let mut rows = Vec::new();
+    for (linear, nx, k) in runs {
+        eprintln!("{linear}, nx = {nx}, k = 1/{} …", (1.0 / k).round());
+        let row = measure_3d(&exe, out, scenario, linear, nx, steps, k)?;
+        eprintln!(
+            "  {} in {:.1} s: {:.3} s per step, {:.0} MiB",
+            row.status,
+            row.wall,
+            row.per_step,
+            row.peak_memory_mib.unwrap_or(f64::NAN)
+        );
+        rows.push(row);
+    }
+    println!("\n{}", format_scale_table(&rows));
+    let path = out.join("bench_3d.json");
     thermocontact::output::write_atomic(&path, &serde_json::to_vec_pretty(&rows)?)?;
     println!("written to {}", path.display());
     Ok(())

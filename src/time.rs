@@ -113,12 +113,12 @@ pub enum LinearSystem {
 impl LinearSystem {
     /// Assembles the step matrix of step size k and factors or preconditions it.
     pub fn new(problem: &Problem, k: f64, params: &SolverParams) -> Result<Self, Error> {
-        let operator = StepMatrix::assemble(problem, k);
-        let unknowns = operator.matrix.n_rows;
-        Ok(match params.linear.resolve(problem.dim(), unknowns, params.kind) {
-            LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, operator, params.krylov)?),
-            _ => LinearSystem::Direct(StepSystem::factored(problem, operator)?),
-        })
+        Ok(
+            match params.linear.resolve(problem.dim(), problem.n_unknowns(), params.kind) {
+                LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, k, params.krylov)?),
+                _ => LinearSystem::Direct(StepSystem::factored(problem, StepMatrix::assemble(problem, k))?),
+            },
+        )
     }
 }
 

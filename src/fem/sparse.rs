@@ -5,6 +5,8 @@
 //! a sorted column). A matrix over nodal blocks of `rows_per_node × cols_per_node` dofs has,
 //! in column `q·c + j`, the rows `p·r + i` for every neighbour p of q and i < r.
 
+use std::sync::Arc;
+
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 
 /// Node adjacency through cells (each node is its own neighbour), sorted per node.
@@ -48,12 +50,16 @@ impl NodeGraph {
 }
 
 /// A compressed-sparse-column matrix with a pattern fixed at creation.
+///
+/// The pattern is shared: a clone has values of its own and the same pattern (the problem's
+/// mass, viscous, elastic and energy matrices are clones of one template, so they hold one
+/// pattern, not four: 0.8 GB less at 10⁶ unknowns in 3D).
 #[derive(Debug, Clone)]
 pub struct CscMatrix {
     pub n_rows: usize,
     pub n_cols: usize,
-    pub col_ptr: Vec<usize>,
-    pub row_idx: Vec<usize>,
+    pub col_ptr: Arc<[usize]>,
+    pub row_idx: Arc<[usize]>,
     pub values: Vec<f64>,
 }
 
@@ -77,8 +83,8 @@ impl CscMatrix {
         CscMatrix {
             n_rows: n * rows_per_node,
             n_cols: n * cols_per_node,
-            col_ptr,
-            row_idx,
+            col_ptr: col_ptr.into(),
+            row_idx: row_idx.into(),
             values: vec![0.0; nnz],
         }
     }
@@ -107,8 +113,8 @@ impl CscMatrix {
         CscMatrix {
             n_rows,
             n_cols,
-            col_ptr,
-            row_idx,
+            col_ptr: col_ptr.into(),
+            row_idx: row_idx.into(),
             values,
         }
     }
@@ -215,9 +221,9 @@ impl CscMatrix {
         let symbolic = SymbolicSparseColMat::new_checked(
             self.n_rows,
             self.n_cols,
-            self.col_ptr.clone(),
+            self.col_ptr.to_vec(),
             None,
-            self.row_idx.clone(),
+            self.row_idx.to_vec(),
         );
         SparseColMat::new(symbolic, self.values.clone())
     }

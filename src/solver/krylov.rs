@@ -77,8 +77,8 @@ impl CsrMatrix {
         }
         CsrMatrix {
             n: s.n_rows,
-            ptr: s.col_ptr.clone(),
-            col: s.row_idx.clone(),
+            ptr: s.col_ptr.to_vec(),
+            col: s.row_idx.to_vec(),
             val,
         }
     }
@@ -86,6 +86,15 @@ impl CsrMatrix {
     /// Number of rows (and columns).
     pub fn n(&self) -> usize {
         self.n
+    }
+
+    /// A matrix from its rows: `ptr` (n + 1 offsets), each row's column indices sorted.
+    ///
+    /// # Panics
+    /// If the offsets do not match the entries.
+    pub fn from_rows(n: usize, ptr: Vec<usize>, col: Vec<usize>, val: Vec<f64>) -> Self {
+        assert!(ptr.len() == n + 1 && ptr[n] == col.len() && col.len() == val.len());
+        CsrMatrix { n, ptr, col, val }
     }
 
     /// P A Pᵀ of A = J S (as [`CsrMatrix::from_symmetric_form`]) for the ordering `order`:
@@ -203,6 +212,10 @@ pub struct Ilu0 {
 
 impl Ilu0 {
     /// Factors A (IKJ order, no pivoting). A zero or non-finite pivot is an error.
+    ///
+    /// The factor is laid out first and then computed row by row into that layout
+    /// ([`Ilu0::refactor_from`] from row 0): no second copy of A's values (0.45 GB at 10⁶
+    /// unknowns).
     pub fn new(a: &CsrMatrix) -> Result<Self, Error> {
         let n = a.n;
         if u32::try_from(n).is_err() {
@@ -213,8 +226,7 @@ impl Ilu0 {
         }
         let mut diag = Vec::with_capacity(n);
         for i in 0..n {
-            let row = &a.col[a.ptr[i]..a.ptr[i + 1]];
-            match row.binary_search(&i) {
+            match a.row(i).0.binary_search(&i) {
                 Ok(p) => diag.push(a.ptr[i] + p),
                 Err(_) => {
                     return Err(Error::Factorization {
@@ -224,60 +236,26 @@ impl Ilu0 {
                 }
             }
         }
-        let mut val = a.val.clone();
-        let mut pos = vec![usize::MAX; n];
-        for i in 0..n {
-            let (s, e) = (a.ptr[i], a.ptr[i + 1]);
-            for p in s..e {
-                pos[a.col[p]] = p;
-            }
-            for p in s..diag[i] {
-                let k = a.col[p];
-                let l = val[p] / val[diag[k]];
-                val[p] = l;
-                for q in diag[k] + 1..a.ptr[k + 1] {
-                    let t = pos[a.col[q]];
-                    if t != usize::MAX {
-                        val[t] -= l * val[q];
-                    }
-                }
-            }
-            for p in s..e {
-                pos[a.col[p]] = usize::MAX;
-            }
-            let pivot = val[diag[i]];
-            if pivot == 0.0 || !pivot.is_finite() {
-                return Err(Error::Factorization {
-                    stage: FactorStage::IncompleteLu,
-                    detail: format!("pivot {pivot} in row {i}"),
-                });
-            }
-        }
         let n_lower: usize = (0..n).map(|i| diag[i] - a.ptr[i]).sum();
         let mut f = Ilu0 {
             l_ptr: Vec::with_capacity(n + 1),
             l_col: Vec::with_capacity(n_lower),
-            l_val: Vec::with_capacity(n_lower),
+            l_val: vec![0.0; n_lower],
             u_ptr: Vec::with_capacity(n + 1),
             u_col: Vec::with_capacity(a.nnz() - n_lower - n),
-            u_val: Vec::with_capacity(a.nnz() - n_lower - n),
-            inv_diag: Vec::with_capacity(n),
+            u_val: vec![0.0; a.nnz() - n_lower - n],
+            inv_diag: vec![0.0; n],
         };
         f.l_ptr.push(0);
         f.u_ptr.push(0);
         for i in 0..n {
-            for p in a.ptr[i]..diag[i] {
-                f.l_col.push(a.col[p] as u32);
-                f.l_val.push(val[p]);
-            }
+            f.l_col.extend(a.col[a.ptr[i]..diag[i]].iter().map(|&c| c as u32));
             f.l_ptr.push(f.l_col.len());
-            for p in diag[i] + 1..a.ptr[i + 1] {
-                f.u_col.push(a.col[p] as u32);
-                f.u_val.push(val[p]);
-            }
+            f.u_col
+                .extend(a.col[diag[i] + 1..a.ptr[i + 1]].iter().map(|&c| c as u32));
             f.u_ptr.push(f.u_col.len());
-            f.inv_diag.push(1.0 / val[diag[i]]);
         }
+        f.refactor_from(a, 0)?;
         Ok(f)
     }
 

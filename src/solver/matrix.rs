@@ -37,54 +37,159 @@ pub struct StepRhs {
 }
 
 impl StepMatrix {
-    /// Assembles the reduced step matrix for a step size k.
+    /// Assembles the reduced step matrix S for a step size k (unknowns in their own order).
     pub fn assemble(problem: &Problem, k: f64) -> Self {
-        let (vel, temp) = (&problem.velocity, &problem.temperature);
-        let n_w = vel.n_free;
-        let n = n_w + temp.n_free;
-        let mats = &problem.matrices;
-        let theta_d = &problem.theta_dirichlet;
-        let mut lift = vec![0.0; n];
-        let mut triplets = Vec::with_capacity(mats.mass.nnz() * 2 + mats.coupling.nnz() * 2 + mats.heat_mass.nnz());
-
-        // Mechanical block ℳ/k + 𝒦_A + k𝒦_B (the three share one pattern).
-        for (idx, (row, col, _)) in mats.mass.triplets().enumerate() {
-            let value = mats.mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
-            for &(r, a) in vel.row(row) {
-                for &(c, b) in vel.row(col) {
-                    triplets.push((r, c, a * b * value));
-                }
-            }
-        }
-        // Coupling G and −Gᵀ.
-        for (row, q, g) in mats.coupling.triplets() {
-            for &(r, a) in vel.row(row) {
-                match temp.free[q] {
-                    Some(c) => {
-                        // G in the velocity rows; −(−Gᵀ) = Gᵀ in the (negated) temperature rows.
-                        triplets.push((r, n_w + c, a * g));
-                        triplets.push((n_w + c, r, a * g));
-                    }
-                    None => lift[r] += a * g * theta_d[q],
-                }
-            }
-        }
-        // Thermal block ℳ_θ/k + 𝒦_θ.
-        for (idx, (p, q, _)) in mats.heat_mass.triplets().enumerate() {
-            let value = mats.heat_mass.values[idx] / k + mats.conduction.values[idx];
-            if let Some(r) = temp.free[p] {
-                match temp.free[q] {
-                    Some(c) => triplets.push((n_w + r, n_w + c, -value)),
-                    None => lift[n_w + r] += value * theta_d[q],
-                }
-            }
-        }
-        let matrix = CscMatrix::from_triplets(n, n, triplets);
+        let n = problem.velocity.n_free + problem.temperature.n_free;
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        col_ptr.push(0);
+        let identity: Vec<usize> = (0..n).collect();
+        let rhs = assemble_by_columns(problem, k, &identity, |column| {
+            row_idx.extend(column.iter().map(|&(r, _)| r));
+            values.extend(column.iter().map(|&(_, v)| v));
+            col_ptr.push(row_idx.len());
+        });
         StepMatrix {
-            matrix,
-            rhs: StepRhs { lift, n_w, k },
+            matrix: CscMatrix {
+                n_rows: n,
+                n_cols: n,
+                col_ptr: col_ptr.into(),
+                row_idx: row_idx.into(),
+                values,
+            },
+            rhs,
         }
     }
+}
+
+/// The step matrix S = J A column by column, without a list of triplets: for each j, column
+/// `order[j]` of S with its rows renumbered by their place in `order` (sorted, duplicates
+/// summed) goes to `emit`. Memory beyond the caller's copy is O(unknowns).
+///
+/// With `order` a permutation P, the columns are those of P S Pᵀ; S is symmetric, so they are
+/// also its rows, and row j of P A Pᵀ is column j negated where `order[j]` is a temperature
+/// unknown (the iterative path builds its CSR of A this way, [`super::newton_krylov`]). The
+/// triplet list this replaces took 24 bytes per entry of the full-dof matrices (2.3 GB at 10⁶
+/// unknowns) on top of the matrix.
+///
+/// Returns the right-hand side's data (the θ_D lift).
+pub fn assemble_by_columns(
+    problem: &Problem,
+    k: f64,
+    order: &[usize],
+    mut emit: impl FnMut(&[(usize, f64)]),
+) -> StepRhs {
+    let (vel, temp) = (&problem.velocity, &problem.temperature);
+    let n_w = vel.n_free;
+    let n = n_w + temp.n_free;
+    assert_eq!(order.len(), n, "an ordering of every unknown");
+    let mats = &problem.matrices;
+    let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
+
+    // The θ_D lift: the columns of prescribed temperatures, moved to the right-hand side.
+    let theta_d = &problem.theta_dirichlet;
+    let mut lift = vec![0.0; n];
+    for (row, q, g) in coupling.triplets() {
+        if temp.free[q].is_none() {
+            for &(r, a) in vel.row(row) {
+                lift[r] += a * g * theta_d[q];
+            }
+        }
+    }
+    for (idx, (p, q, _)) in heat_mass.triplets().enumerate() {
+        if let (Some(r), None) = (temp.free[p], temp.free[q]) {
+            lift[n_w + r] += (heat_mass.values[idx] / k + mats.conduction.values[idx]) * theta_d[q];
+        }
+    }
+
+    // Pᵀ by unknowns: the full dofs (and coefficients) of each velocity unknown; the node of
+    // each temperature unknown; G by rows (full velocity dofs).
+    let mut full_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_w];
+    for f in 0..vel.n_full() {
+        for &(r, a) in vel.row(f) {
+            full_of[r].push((f, a));
+        }
+    }
+    let mut node_of = vec![0; temp.n_free];
+    for (q, free) in temp.free.iter().enumerate() {
+        if let Some(c) = free {
+            node_of[*c] = q;
+        }
+    }
+    let mut g_ptr = vec![0usize; coupling.n_rows + 1];
+    coupling.row_idx.iter().for_each(|&r| g_ptr[r + 1] += 1);
+    for r in 0..coupling.n_rows {
+        g_ptr[r + 1] += g_ptr[r];
+    }
+    let mut g_entries = vec![(0usize, 0.0); coupling.nnz()];
+    let mut fill = g_ptr.clone();
+    for (row, q, g) in coupling.triplets() {
+        g_entries[fill[row]] = (q, g);
+        fill[row] += 1;
+    }
+
+    let mut position = vec![0; n];
+    order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
+    // The column being summed: its values by position, which positions it has (an entry that
+    // sums to zero stays in the pattern), and their list.
+    let mut sum = vec![0.0; n];
+    let mut seen = vec![false; n];
+    let mut touched: Vec<usize> = Vec::new();
+    let mut column: Vec<(usize, f64)> = Vec::new();
+    let add = |row: usize, value: f64, sum: &mut [f64], seen: &mut [bool], touched: &mut Vec<usize>| {
+        let p = position[row];
+        if !seen[p] {
+            seen[p] = true;
+            touched.push(p);
+        }
+        sum[p] += value;
+    };
+    for &c in order {
+        touched.clear();
+        if c < n_w {
+            // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
+            for &(f, b) in &full_of[c] {
+                for idx in mass.col_ptr[f]..mass.col_ptr[f + 1] {
+                    let value = mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
+                    for &(r, a) in vel.row(mass.row_idx[idx]) {
+                        add(r, a * b * value, &mut sum, &mut seen, &mut touched);
+                    }
+                }
+                for &(q, g) in &g_entries[g_ptr[f]..g_ptr[f + 1]] {
+                    if let Some(cq) = temp.free[q] {
+                        add(n_w + cq, b * g, &mut sum, &mut seen, &mut touched);
+                    }
+                }
+            }
+        } else {
+            // Temperature column: G, and −(ℳ_θ/k + 𝒦_θ) in the (negated) temperature rows.
+            let q = node_of[c - n_w];
+            for (row, g) in coupling.row_idx[coupling.col_ptr[q]..coupling.col_ptr[q + 1]]
+                .iter()
+                .zip(&coupling.values[coupling.col_ptr[q]..coupling.col_ptr[q + 1]])
+            {
+                for &(r, a) in vel.row(*row) {
+                    add(r, a * g, &mut sum, &mut seen, &mut touched);
+                }
+            }
+            for idx in heat_mass.col_ptr[q]..heat_mass.col_ptr[q + 1] {
+                if let Some(r) = temp.free[heat_mass.row_idx[idx]] {
+                    let value = heat_mass.values[idx] / k + mats.conduction.values[idx];
+                    add(n_w + r, -value, &mut sum, &mut seen, &mut touched);
+                }
+            }
+        }
+        touched.sort_unstable();
+        column.clear();
+        for &p in &touched {
+            column.push((p, sum[p]));
+            sum[p] = 0.0;
+            seen[p] = false;
+        }
+        emit(&column);
+    }
+    StepRhs { lift, n_w, k }
 }
 
 impl StepRhs {

@@ -51,7 +51,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use super::krylov::{gmres, CsrMatrix, Ilu0, KrylovParams};
-use super::matrix::{StepMatrix, StepRhs};
+use super::matrix::{assemble_by_columns, StepRhs};
 use super::newton::{max_diff, slip_linearization};
 use super::system::{norm2 as norm, State, SystemStats};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
@@ -97,11 +97,12 @@ pub struct KrylovSystem {
 }
 
 impl KrylovSystem {
-    /// Orders the step matrix (Γ_C tangential velocities last), keeps A in that order and
-    /// factors its ILU(0); the symmetric form is let go.
-    pub fn new(problem: &Problem, operator: StepMatrix, params: KrylovParams) -> Result<Self, Error> {
-        let StepMatrix { matrix, rhs } = operator;
-        let n = matrix.n_rows;
+    /// Assembles the step matrix of step size k in the order with the Γ_C tangential
+    /// velocities last, as A's rows (no symmetric form, no triplets: [`assemble_by_columns`]),
+    /// and factors its ILU(0).
+    pub fn new(problem: &Problem, k: f64, params: KrylovParams) -> Result<Self, Error> {
+        let n_w = problem.velocity.n_free;
+        let n = n_w + problem.temperature.n_free;
         let tangential: Vec<usize> = (problem.contact.iter())
             .flat_map(|node| node.tangent_dofs.iter().flatten().copied())
             .collect();
@@ -112,8 +113,19 @@ impl KrylovSystem {
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
         let first_contact = n - is_contact.iter().filter(|&&c| c).count();
 
-        let a = CsrMatrix::from_symmetric_form_ordered(&matrix, rhs.n_w(), &order);
-        drop(matrix);
+        // Row j of P A Pᵀ is column j of P S Pᵀ, negated for a temperature unknown.
+        let mut ptr = Vec::with_capacity(n + 1);
+        let (mut col, mut val) = (Vec::new(), Vec::new());
+        ptr.push(0);
+        let mut j = 0;
+        let rhs = assemble_by_columns(problem, k, &order, |column| {
+            let sign = if order[j] < n_w { 1.0 } else { -1.0 };
+            col.extend(column.iter().map(|&(c, _)| c));
+            val.extend(column.iter().map(|&(_, v)| sign * v));
+            ptr.push(col.len());
+            j += 1;
+        });
+        let a = CsrMatrix::from_rows(n, ptr, col, val);
         let base: Vec<f64> = (first_contact..n).flat_map(|i| a.row(i).1.to_vec()).collect();
         let base_start: Vec<usize> = (first_contact..n)
             .scan(0, |start, i| {
@@ -136,7 +148,7 @@ impl KrylovSystem {
                 NodeRows {
                     node: i,
                     tangent,
-                    theta: node.theta_dof.map(|r| position[rhs.n_w() + r]),
+                    theta: node.theta_dof.map(|r| position[n_w + r]),
                     weight: node.weight,
                     augmentation: if node.weight > 0.0 && stiffness > 0.0 {
                         stiffness / node.weight
