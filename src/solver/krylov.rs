@@ -546,6 +546,70 @@ mod tests {
         }
     }
 
+    /// ILU(0) is exact where it has no fill (a tridiagonal matrix): LU z = r solves A z = r.
+    #[test]
+    fn ilu0_of_a_tridiagonal_matrix_is_its_lu() {
+        let n: usize = 6;
+        let (mut ptr, mut col, mut val) = (vec![0], vec![], vec![]);
+        for i in 0..n {
+            for (j, v) in [(i.wrapping_sub(1), -1.0), (i, 4.0 + i as f64), (i + 1, -2.0)] {
+                if j < n {
+                    col.push(j);
+                    val.push(v);
+                }
+            }
+            ptr.push(col.len());
+        }
+        let a = CsrMatrix::from_rows(n, ptr, col, val);
+        let ilu = Ilu0::new(&a).unwrap();
+        let r: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let mut z = vec![0.0; n];
+        ilu.apply(&r, &mut z);
+        let mut az = vec![0.0; n];
+        a.mul(&z, &mut az);
+        for (x, y) in az.iter().zip(&r) {
+            assert!((x - y).abs() <= 1e-14 * y.abs(), "{az:?} {r:?}");
+        }
+    }
+
+    /// Refactoring the rows from `first` on after they change gives the factor of the changed
+    /// matrix, to the bit.
+    #[test]
+    fn refactoring_the_last_rows_equals_a_new_factor() {
+        let (s, n_w) = small_s();
+        let mut a = CsrMatrix::from_symmetric_form(&s, n_w);
+        let mut ilu = Ilu0::new(&a).unwrap();
+        for row in 4..6 {
+            for (p, v) in a.row_values_mut(row).iter_mut().enumerate() {
+                *v *= 1.5 + 0.25 * p as f64;
+            }
+        }
+        ilu.refactor_from(&a, 4).unwrap();
+        let fresh = Ilu0::new(&a).unwrap();
+        assert_eq!(ilu.l_val, fresh.l_val);
+        assert_eq!(ilu.u_val, fresh.u_val);
+        assert_eq!(ilu.inv_diag, fresh.inv_diag);
+        assert!(ilu.inv_diag.iter().all(|d| d.is_finite()));
+    }
+
+    /// The ordered form is P A Pᵀ: entry (i, j) is A's entry (order[i], order[j]).
+    #[test]
+    fn ordered_form_permutes_rows_and_columns() {
+        let (s, n_w) = small_s();
+        let a = CsrMatrix::from_symmetric_form(&s, n_w);
+        let order = [2, 5, 0, 4, 1, 3];
+        let p = CsrMatrix::from_symmetric_form_ordered(&s, n_w, &order);
+        let entry = |m: &CsrMatrix, i: usize, j: usize| {
+            let (cols, vals) = m.row(i);
+            cols.binary_search(&j).map_or(0.0, |k| vals[k])
+        };
+        for i in 0..6 {
+            for j in 0..6 {
+                assert_eq!(entry(&p, i, j), entry(&a, order[i], order[j]));
+            }
+        }
+    }
+
     #[test]
     fn a_capped_solve_is_a_typed_error_with_its_history() {
         let (s, n_w) = small_s();
