@@ -251,6 +251,9 @@ pub struct PyStepInfo {
     substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
     cutback_depth: usize,
+    /// Krylov (GMRES) iterations of the step's linear solves (iterative path; 0 on the direct
+    /// path).
+    krylov_iterations: usize,
 }
 
 impl From<StepInfo> for PyStepInfo {
@@ -264,6 +267,7 @@ impl From<StepInfo> for PyStepInfo {
             descent_sweeps: info.descent_sweeps,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
+            krylov_iterations: info.krylov_iterations,
         }
     }
 }
@@ -281,20 +285,22 @@ impl PyStepInfo {
         d.set_item("descent_sweeps", self.descent_sweeps)?;
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
+        d.set_item("krylov_iterations", self.krylov_iterations)?;
         Ok(d)
     }
 
     fn __repr__(&self) -> String {
         format!(
             "StepInfo(convexification_iterations={}, inner_iterations={}, newton_iterations={}, fallback={}, \
-             descent_sweeps={}, substeps={}, cutback_depth={})",
+             descent_sweeps={}, substeps={}, cutback_depth={}, krylov_iterations={})",
             self.convexification_iterations,
             self.inner_iterations,
             self.newton_iterations,
             if self.fallback { "True" } else { "False" },
             self.descent_sweeps,
             self.substeps,
-            self.cutback_depth
+            self.cutback_depth,
+            self.krylov_iterations
         )
     }
 }

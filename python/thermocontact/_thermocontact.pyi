@@ -103,6 +103,7 @@ class StepInfo:
     descent_sweeps: int
     substeps: int
     cutback_depth: int
+    krylov_iterations: int
     def to_dict(self) -> dict[str, Any]: ...
 
 class Contact:
