@@ -8,8 +8,11 @@
 //! 5–7 iterations at 10⁵–10⁶ unknowns; the iteration count grows with k (≈ 20 at k = 1/8), where
 //! an AMG-preconditioned velocity block would keep it bounded.
 //!
-//! [`LinearSolver`] is the interface a step solver would hold; nothing in the crate uses the
-//! iterative solver yet (the default behaviour is unchanged).
+//! The iterative path's step solver ([`super::newton_krylov`]) uses [`gmres`] and [`Ilu0`]
+//! directly: its matrix changes in the contact rows at every Newton iteration, and
+//! [`Ilu0::refactor_from`] refactors just those rows. [`LinearSolver`], with [`DirectSolver`]
+//! and [`IterativeSolver`] for the constant step matrix, is the interface the studies and
+//! `tests/krylov.rs` compare the two kinds of solve through.
 
 use rayon::prelude::*;
 
