@@ -115,7 +115,10 @@ fn krylov_iterations_stay_bounded_under_refinement() {
     let coarse = per_solve([16, 4, 4]);
     let fine = per_solve([32, 8, 8]);
     assert!(coarse >= 1.0 && fine >= 1.0, "{coarse} {fine}");
-    assert!(fine <= 2.0 * coarse, "iterations per solve grew from {coarse:.1} to {fine:.1}");
+    assert!(
+        fine <= 2.0 * coarse,
+        "iterations per solve grew from {coarse:.1} to {fine:.1}"
+    );
 }
 
 /// `auto` is direct in 2D and for small 3D problems, iterative from 40 000 unknowns in 3D; the
@@ -128,11 +131,16 @@ fn auto_picks_the_path_by_size_and_the_paper_solver_needs_direct() {
     assert_eq!(auto.resolve(3, 17_590, SolverKind::Fast), LinearKind::Direct);
     assert_eq!(auto.resolve(3, 98_334, SolverKind::Fast), LinearKind::Iterative);
     assert_eq!(auto.resolve(3, 98_334, SolverKind::Paper), LinearKind::Direct);
-    let error = Scenario::load(Some(PAPER3D), &["solver.kind=paper".into(), "solver.linear=iterative".into()])
+    let error = Scenario::load(
+        Some(PAPER3D),
+        &["solver.kind=paper".into(), "solver.linear=iterative".into()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(error.contains("solver.linear"), "{error}");
+    let error = Scenario::load(None, &["solver.linear=cg".into()])
         .unwrap_err()
         .to_string();
-    assert!(error.contains("solver.linear"), "{error}");
-    let error = Scenario::load(None, &["solver.linear=cg".into()]).unwrap_err().to_string();
     assert!(error.contains("solver.linear"), "{error}");
 }
 
@@ -154,5 +162,8 @@ fn a_krylov_solve_at_its_cap_fails_the_step_naming_the_linear_residual() {
         "iterative",
     );
     let error = scenario.run_quiet().unwrap_err().to_string();
-    assert!(error.contains("GMRES") && error.contains("relative residual of the linear solve"), "{error}");
+    assert!(
+        error.contains("GMRES") && error.contains("relative residual of the linear solve"),
+        "{error}"
+    );
 }
