@@ -108,3 +108,47 @@ fn readme_shows_the_default_scenario_verbatim() {
         ".ci/run runs the README's test command"
     );
 }
+
+/// Boxes within the length range whose cells are too elongated for a mesh: a clean error
+/// naming the keys and the bound, exit 1 (they panicked with exit 101 before).
+#[test]
+fn elongated_boxes_are_refused_naming_the_lengths_and_the_cell_counts() {
+    let paper3d = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/paper3d.toml");
+    let cases: [(&[&str], &str); 2] = [
+        (&["--set", "geometry.lengths=[1e-6,1e6]"], "mesh.nx, mesh.ny"),
+        (
+            &[
+                paper3d,
+                "--set",
+                "geometry.lengths=[1e-4,1.0,1e4]",
+                "--set",
+                "mesh.nx=4",
+                "--set",
+                "mesh.ny=2",
+                "--set",
+                "mesh.nz=2",
+                "--set",
+                "time.steps=4",
+            ],
+            "mesh.nx, mesh.ny, mesh.nz",
+        ),
+    ];
+    for (args, counts) in cases {
+        let out = scratch("elongated");
+        let result = bin()
+            .args(["run", "--quiet"])
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains("`geometry.lengths`") && stderr.contains(counts) && stderr.contains("at most 1e4 times"),
+            "{stderr}"
+        );
+        assert!(!out.exists(), "nothing is written for an invalid scenario");
+    }
+}
