@@ -169,8 +169,8 @@ impl Setup<'_> {
             descent_sweeps: tally.descent_sweeps,
             krylov_iterations: tally.krylov_iterations,
             linear: self.linear.name().to_string(),
-            linear_solves: 0,
-            full_sweeps: 0,
+            linear_solves: tally.solve_equivalents(),
+            full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
             peak_memory_mib: crate::bench::peak_memory_mib(),
             max_law_residual: tally.max_law_residual,
@@ -274,6 +274,9 @@ pub fn run_observed(
             (checkpoint.state.clone(), tally)
         }
     };
+    // The loop's linear work before this process (a continued run's checkpoint has it): the
+    // tally adds this process's to it wherever it is saved.
+    let (solves_before, sweeps_before) = (tally.solves, tally.sweeps);
 
     // Claim the folder before the expensive set-up: a refused folder fails at once.
     let files = match &options.out_dir {
@@ -307,6 +310,11 @@ pub fn run_observed(
         plan,
         factor_nnz: levels.first().factor_nnz(),
         linear: levels.first().linear(),
+    };
+    let count_work = |tally: &mut Tally| {
+        let stats = levels.step_stats();
+        tally.solves = solves_before + stats.solves;
+        tally.sweeps = sweeps_before + stats.sweeps;
     };
 
     if let Some(files) = &files {
@@ -413,6 +421,7 @@ pub fn run_observed(
         }
         if let (Some(files), Some(every)) = (&files, plan.checkpoint_every) {
             if state.n % every == 0 && state.n < n_steps {
+                count_work(&mut tally);
                 files.checkpoint(state, &tally)?;
                 files.steps(&tally)?;
                 files.summary(&setup.summary(&tally, RunStatus::Running, None, timings.clone()))?;
@@ -464,6 +473,7 @@ pub fn run_observed(
     timings.contact_solver =
         timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
 
+    count_work(&mut tally);
     let status = RunStatus::of(failure.as_ref());
     let failure_record = failure.as_ref().map(|e| FailureRecord::new(e, &state));
     let written = match &files {
@@ -488,19 +498,14 @@ pub fn run_observed(
                 files.steps(&tally)?;
                 timings.output = output_time + clock.elapsed().as_secs_f64();
                 timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-                let mut summary = setup.summary(&tally, status, failure_record.clone(), timings.clone());
-                summary.linear_solves = loop_stats.solve_equivalents();
-                summary.full_sweeps = loop_stats.full_sweeps();
-                files.summary(&summary)
+                files.summary(&setup.summary(&tally, status, failure_record.clone(), timings.clone()))
             })()
         }
         None => Ok(()),
     };
     timings.output = timings.output.max(output_time);
     timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-    let mut summary = setup.summary(&tally, status, failure_record, timings);
-    summary.linear_solves = loop_stats.solve_equivalents();
-    summary.full_sweeps = loop_stats.full_sweeps();
+    let summary = setup.summary(&tally, status, failure_record, timings);
     match (failure, written) {
         // The error that stopped the run comes first; one met while recording it is logged.
         (Some(error), written) => {

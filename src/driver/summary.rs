@@ -89,9 +89,11 @@ pub struct Summary {
     pub descent_sweeps: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
+    /// Over the whole run: a continued run adds its own to those of the parts before (their
+    /// checkpoint carries them), failed attempts at a step included.
     pub linear_solves: usize,
     /// Triangular sweeps over all of the factor in the time loop (forward or backward; a full
-    /// solve counts two).
+    /// solve counts two), over the whole run as `linear_solves`.
     pub full_sweeps: usize,
     /// Stored entries of the LDLᵀ factor of the step matrix (direct path), or of its ILU(0)
     /// factor (iterative path).
@@ -275,6 +277,14 @@ pub struct Tally {
     pub descent_sweeps: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
+    /// Full solves with the step matrix in the time loop, over every part of the run (a
+    /// continued run adds its own to those of its checkpoint; 0 in checkpoints from before
+    /// they were kept).
+    #[serde(default)]
+    pub solves: usize,
+    /// Triangular sweeps over all of the factor done on their own in the time loop, likewise.
+    #[serde(default)]
+    pub sweeps: usize,
     pub max_law_residual: f64,
     pub cutbacks: Vec<CutbackRecord>,
     pub outputs: Vec<OutputRecord>,
@@ -304,6 +314,18 @@ impl Tally {
         self.krylov_iterations += info.krylov_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);
         self.steps.push(record);
+    }
+
+    /// Sweeps over all of the factor in the time loop, a full solve counting two
+    /// (`summary.json`'s `full_sweeps`).
+    pub fn full_sweeps(&self) -> usize {
+        2 * self.solves + self.sweeps
+    }
+
+    /// Full solves and their equivalents, two sweeps counting one, rounded up
+    /// (`summary.json`'s `linear_solves`).
+    pub fn solve_equivalents(&self) -> usize {
+        self.full_sweeps().div_ceil(2)
     }
 }
 
