@@ -218,6 +218,38 @@ fn main() -> ExitCode {
     }
 }
 
+/// What a stopped run left in its folder, for the message after its error: only the files that
+/// are there (a run that fails before its first step has written no checkpoint, or nothing).
+fn stopped_run_hint(out: &std::path::Path) -> String {
+    let has = |name: &str| out.join(name).is_file();
+    let mut left = Vec::new();
+    if has("solution.pvd") {
+        left.push("solution.pvd with the frames so far and the last completed step".to_string());
+    }
+    if has(driver::CHECKPOINT_FILE) {
+        left.push(format!(
+            "{} to continue with `thermocontact run --restart {}`",
+            driver::CHECKPOINT_FILE,
+            out.display()
+        ));
+    }
+    if has("summary.json") {
+        left.push("summary.json with the status and the reason".to_string());
+    }
+    if left.is_empty() {
+        format!(
+            "the run stopped before it wrote any result into {}/ (nothing to continue from)",
+            out.display()
+        )
+    } else {
+        format!(
+            "the run stopped; what it computed is in {}/ ({})",
+            out.display(),
+            left.join(", ")
+        )
+    }
+}
+
 /// SIGINT and SIGTERM ask the run to stop after the current step (and say so on stderr); a
 /// second one ends the process at once.
 fn stop_on_signals() -> anyhow::Result<StopFlag> {
@@ -307,13 +339,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
                 .inspect_err(|error| match error {
                     thermocontact::Error::Folder(_) | thermocontact::Error::Checkpoint(_) => {}
-                    _ => eprintln!(
-                        "the run stopped; what it computed is in {}/ (solution.pvd with the last completed \
-                         step, checkpoint.bin to continue with `thermocontact run --restart {}`, summary.json \
-                         with the status and the reason)",
-                        out.display(),
-                        out.display()
-                    ),
+                    _ => eprintln!("{}", stopped_run_hint(&out)),
                 })?;
             print_summary(&summary);
             println!(

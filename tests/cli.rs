@@ -152,3 +152,25 @@ fn elongated_boxes_are_refused_naming_the_lengths_and_the_cell_counts() {
         assert!(!out.exists(), "nothing is written for an invalid scenario");
     }
 }
+
+/// A run that fails before its first step has written no checkpoint (nor anything else):
+/// the message after the error says so instead of pointing at `checkpoint.bin`.
+#[test]
+fn a_run_that_fails_before_its_first_step_points_at_no_checkpoint() {
+    let out = scratch("singular");
+    let result = bin()
+        .args(["run", "--quiet", "--set", "material.thermal_expansion=1e18", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("factoring the step matrix failed"), "{stderr}");
+    assert!(!out.join("checkpoint.bin").exists());
+    assert!(
+        !stderr.contains("checkpoint.bin") && !stderr.contains("--restart"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("before it wrote any result"), "{stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -327,6 +327,78 @@ fn the_cli_stops_on_sigterm_survives_sigkill_and_restarts() {
     std::fs::remove_dir_all(&whole).unwrap();
 }
 
+/// A failed run continued to the end leaves no checkpoint, even without `checkpoint_every`
+/// (a stale one made `--restart` silently compute the end again), and the folder it leaves is
+/// refused without the offer to `--restart` it (there is nothing to continue).
+#[test]
+fn a_failed_run_continued_to_the_end_leaves_no_checkpoint() {
+    let dir = scratch("cli-failed");
+    let small = ["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"];
+    let failing = [
+        "--set",
+        "solver.cutback=false",
+        "--set",
+        "solver.max_sweeps=0",
+        "--set",
+        "solver.max_convexification=5",
+    ];
+    let failed = bin()
+        .args(["run", "--quiet"])
+        .args(small)
+        .args(failing)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert_eq!(failed.status.code(), Some(1), "{stderr}");
+    assert_eq!(summary(&dir)["status"], "failed");
+    assert!(dir.join(CHECKPOINT_FILE).exists());
+    assert!(
+        stderr.contains(&format!(
+            "checkpoint.bin to continue with `thermocontact run --restart {}`",
+            dir.display()
+        )),
+        "{stderr}"
+    );
+
+    let continued = bin()
+        .args(["run", "--quiet", "--restart"])
+        .arg(&dir)
+        .args(["--set", "solver.max_convexification=200"])
+        .output()
+        .unwrap();
+    assert!(
+        continued.status.success(),
+        "{}",
+        String::from_utf8_lossy(&continued.stderr)
+    );
+    assert_eq!(summary(&dir)["status"], "completed");
+    assert!(
+        !dir.join(CHECKPOINT_FILE).exists(),
+        "a completed run keeps no checkpoint"
+    );
+
+    let again = bin()
+        .args(["run", "--quiet"])
+        .args(small)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("holds the results of another run") && stderr.contains("--overwrite"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("--restart"),
+        "no checkpoint to continue from: {stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `initial.from`: a checkpoint's fields become the initial data of another run on the same
 /// mesh; a checkpoint of another mesh is refused, naming the key.
 #[test]

@@ -75,7 +75,7 @@ impl Restart {
 }
 
 /// The checkpoint's file name in an output folder.
-pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+pub const CHECKPOINT_FILE: &str = crate::output::folder::CHECKPOINT_FILE;
 
 /// What a run records, and when.
 #[derive(Debug, Clone, PartialEq)]
@@ -491,9 +491,14 @@ pub fn run_observed(
                         let record = record(problem, &state, plan.slip_tolerance);
                         files.frame(&state, &record, &mut tally)?;
                     }
-                } else if plan.checkpoint_every.is_some() {
-                    // A completed run's checkpoint is of no use any more.
-                    let _ = std::fs::remove_file(files.dir().join(CHECKPOINT_FILE));
+                } else {
+                    // A completed run's checkpoint is of no use any more, whether this run wrote
+                    // it (`checkpoint_every`) or the stopped run it continued did; left in place,
+                    // `--restart` would silently compute the end again from it.
+                    match std::fs::remove_file(files.dir().join(CHECKPOINT_FILE)) {
+                        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(files.io(CHECKPOINT_FILE)(e)),
+                        _ => {}
+                    }
                 }
                 files.steps(&tally)?;
                 timings.output = output_time + clock.elapsed().as_secs_f64();
