@@ -208,7 +208,7 @@ fn main() -> ExitCode {
     match execute(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", chain(&e));
             match e.downcast_ref::<thermocontact::Error>() {
                 // 130 / 143, as the shell reports a process ended by SIGINT / SIGTERM.
                 Some(thermocontact::Error::Interrupted { cause, .. }) => ExitCode::from(cause.exit_code()),
@@ -216,6 +216,26 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// The error and its causes, joined by ": ", each cause once: a message that already quotes its
+/// cause (`cannot read x: No such file or directory (os error 2)`, as the library's errors do so
+/// that their `to_string()` is complete) is not followed by that cause again.
+fn chain(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    let mut previous = String::new();
+    for cause in error.chain() {
+        let message = cause.to_string();
+        if !previous.is_empty() && previous.contains(&message) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&message);
+        previous = message;
+    }
+    text
 }
 
 /// What a stopped run left in its folder, for the message after its error: only the files that

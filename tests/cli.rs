@@ -153,6 +153,32 @@ fn elongated_boxes_are_refused_naming_the_lengths_and_the_cell_counts() {
     }
 }
 
+/// An OS error is printed once, not once by the message that quotes it and again as its cause.
+#[test]
+fn os_errors_are_printed_once() {
+    let file = scratch("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let result = bin().args(["run", "--quiet", "--out"]).arg(&file).output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("cannot use") && stderr.contains("as the output folder"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches("(os error").count(), 1, "{stderr}");
+    std::fs::remove_file(&file).unwrap();
+
+    let missing = scratch("no-such-run");
+    let result = bin()
+        .args(["run", "--quiet", "--restart"])
+        .arg(&missing)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("scenario.toml"), "{stderr}");
+    assert_eq!(stderr.matches("(os error").count(), 1, "{stderr}");
+}
+
 /// A run that fails before its first step has written no checkpoint (nor anything else):
 /// the message after the error says so instead of pointing at `checkpoint.bin`.
 #[test]
