@@ -200,3 +200,112 @@ fn a_run_that_fails_before_its_first_step_points_at_no_checkpoint() {
     assert!(stderr.contains("before it wrote any result"), "{stderr}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Batch runs (stderr not a terminal): progress lines with the step, t, iterations, cutbacks,
+/// slip and stick counts, elapsed and remaining time; steps.csv with a row per step that has
+/// the slip and stick counts, the increments and the law residual.
+#[test]
+fn batch_runs_log_progress_lines_and_steps_csv_has_slip_and_stick_counts() {
+    let out = scratch("batch");
+    let result = bin()
+        .args([
+            "run",
+            "--set",
+            "mesh.nx=16",
+            "--set",
+            "mesh.ny=4",
+            "--set",
+            "time.steps=16",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("step ") && l.contains("/16 t = "))
+        .collect();
+    // One line per output time (4), the last one at the end.
+    assert_eq!(lines.len(), 4, "{stderr}");
+    assert!(lines[3].starts_with("step 16/16 t = 1.000000: "), "{stderr}");
+    for line in &lines {
+        for part in [
+            " convexification, ",
+            " inner, ",
+            " Newton, ",
+            " steps cut back so far; ",
+            " slip, ",
+            " stick; ",
+            "law residual ",
+            "elapsed ",
+            "remaining ",
+        ] {
+            assert!(line.contains(part), "`{part}` missing in: {line}");
+        }
+    }
+
+    let steps = std::fs::read_to_string(out.join("steps.csv")).unwrap();
+    let mut rows = steps.lines();
+    let header: Vec<&str> = rows.next().unwrap().split(',').collect();
+    for column in [
+        "n",
+        "t",
+        "convexification",
+        "krylov",
+        "increment_u",
+        "increment_theta",
+        "increment_xi",
+        "increment_zeta",
+        "law_residual",
+        "slip",
+        "stick",
+        "seconds",
+    ] {
+        assert!(header.contains(&column), "{column} missing: {header:?}");
+    }
+    let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let contact_nodes = summary["contact_nodes"].as_u64().unwrap();
+    let rows: Vec<Vec<&str>> = rows.map(|r| r.split(',').collect()).collect();
+    assert_eq!(rows.len(), 16);
+    for row in &rows {
+        let count = |name: &str| row[column(name)].parse::<u64>().unwrap();
+        assert_eq!(count("slip") + count("stick"), contact_nodes, "{row:?}");
+    }
+    // At the output times, the counts of the summary (and of the contact CSVs).
+    for o in summary["outputs"].as_array().unwrap() {
+        let row = &rows[o["n"].as_u64().unwrap() as usize - 1];
+        assert_eq!(row[column("slip")], o["slip_nodes"].to_string(), "{row:?}");
+        assert_eq!(row[column("stick")], o["stick_nodes"].to_string(), "{row:?}");
+    }
+    // The paper's solver measures the increments (77)–(80): each within its tolerance.
+    let paper = scratch("batch-paper");
+    let result = bin()
+        .args([
+            "run",
+            "--quiet",
+            "--set",
+            "solver.kind=paper",
+            "--set",
+            "mesh.nx=8",
+            "--set",
+            "mesh.ny=2",
+        ])
+        .args(["--set", "time.steps=4", "--out"])
+        .arg(&paper)
+        .output()
+        .unwrap();
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    let steps = std::fs::read_to_string(paper.join("steps.csv")).unwrap();
+    for row in steps.lines().skip(1) {
+        let row: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+        for name in ["increment_u", "increment_theta", "increment_xi", "increment_zeta"] {
+            let value = row[column(name)];
+            assert!((0.0..=1e-6).contains(&value), "{name} = {value}");
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+    std::fs::remove_dir_all(&paper).ok();
+}

@@ -222,15 +222,36 @@ pub struct StepRecord {
     /// Substeps taken (1: no cutback) and the deepest cutback.
     pub substeps: usize,
     pub cutback_depth: usize,
+    /// The last relative increments of u, θ, ξ, ζ of the step's solver (the left sides of the
+    /// stop criteria (77)–(80); [`StepInfo::increments`]); NaN for the fast solver, which
+    /// stops on the nodal law instead and does not measure them.
+    #[serde(default = "unmeasured", deserialize_with = "nan_from_null")]
+    pub increments: [f64; 4],
     /// The step's nodal friction-law residual, relative to μ(0)S.
     pub law_residual: f64,
+    /// Contact nodes that slip (|w_τ| > the slip tolerance) and that stick at the step's end.
+    #[serde(default)]
+    pub slip_nodes: usize,
+    #[serde(default)]
+    pub stick_nodes: usize,
     /// Wall time of the step, s.
     pub seconds: f64,
 }
 
+/// Increments not measured (and those of checkpoints written before steps.csv had them).
+fn unmeasured() -> [f64; 4] {
+    [f64::NAN; 4]
+}
+
+/// JSON writes NaN as `null`: read it back as NaN.
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<[f64; 4], D::Error> {
+    let values = <[Option<f64>; 4]>::deserialize(deserializer)?;
+    Ok(values.map(|v| v.unwrap_or(f64::NAN)))
+}
+
 impl StepRecord {
     /// The columns of `steps.csv`.
-    pub const HEADER: [&'static str; 11] = [
+    pub const HEADER: [&'static str; 17] = [
         "n",
         "t",
         "convexification",
@@ -240,13 +261,19 @@ impl StepRecord {
         "krylov",
         "substeps",
         "cutback_depth",
+        "increment_u",
+        "increment_theta",
+        "increment_xi",
+        "increment_zeta",
         "law_residual",
+        "slip",
+        "stick",
         "seconds",
     ];
 
     /// The record as a `steps.csv` row.
     pub fn row(&self) -> Vec<f64> {
-        vec![
+        let mut row = vec![
             self.n as f64,
             self.t,
             self.convexification_iterations as f64,
@@ -256,9 +283,15 @@ impl StepRecord {
             self.krylov_iterations as f64,
             self.substeps as f64,
             self.cutback_depth as f64,
+        ];
+        row.extend(self.increments);
+        row.extend([
             self.law_residual,
+            self.slip_nodes as f64,
+            self.stick_nodes as f64,
             self.seconds,
-        ]
+        ]);
+        row
     }
 }
 
