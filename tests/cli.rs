@@ -309,3 +309,102 @@ fn batch_runs_log_progress_lines_and_steps_csv_has_slip_and_stick_counts() {
     std::fs::remove_dir_all(&out).ok();
     std::fs::remove_dir_all(&paper).ok();
 }
+
+/// The files of a folder, each as the bytes that must not depend on the thread count:
+/// steps.csv without its `seconds` column, summary.json without the run id, timings and peak
+/// memory, every other file (frames, contact CSVs, the .pvd, scenario.toml) as it is.
+fn thread_independent_contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| !name.starts_with('.'))
+        .map(|name| {
+            let bytes = std::fs::read(dir.join(&name)).unwrap();
+            let bytes = match name.as_str() {
+                "steps.csv" => {
+                    let text = String::from_utf8(bytes).unwrap();
+                    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+                    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
+                    let kept: Vec<String> = text
+                        .lines()
+                        .map(|line| {
+                            let mut cells: Vec<&str> = line.split(',').collect();
+                            cells.remove(seconds);
+                            cells.join(",")
+                        })
+                        .collect();
+                    kept.join("\n").into_bytes()
+                }
+                "summary.json" => {
+                    let mut summary: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                    let map = summary.as_object_mut().unwrap();
+                    for machine in ["run_id", "timings", "peak_memory_mib"] {
+                        assert!(map.remove(machine).is_some(), "{machine}");
+                    }
+                    serde_json::to_vec_pretty(&summary).unwrap()
+                }
+                _ => bytes,
+            };
+            (name, bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// Bitwise reproducible on any thread count: the CLI run on 1 and on 2 threads writes the same
+/// files, byte for byte (less the wall times and the run id), in 2D and 3D.
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let paper3d = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/paper3d.toml");
+    let cases: [(&str, Vec<&str>); 2] = [
+        (
+            "2d",
+            vec!["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"],
+        ),
+        (
+            "3d",
+            vec![
+                paper3d,
+                "--set",
+                "mesh.nx=8",
+                "--set",
+                "mesh.ny=2",
+                "--set",
+                "mesh.nz=2",
+                "--set",
+                "time.steps=4",
+            ],
+        ),
+    ];
+    for (tag, args) in cases {
+        let contents: Vec<Vec<(String, Vec<u8>)>> = ["1", "2"]
+            .iter()
+            .map(|threads| {
+                let out = scratch(&format!("threads-{tag}-{threads}"));
+                let result = bin()
+                    .env("RAYON_NUM_THREADS", threads)
+                    .args(["run", "--quiet"])
+                    .args(&args)
+                    .arg("--out")
+                    .arg(&out)
+                    .output()
+                    .unwrap();
+                assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+                let contents = thread_independent_contents(&out);
+                std::fs::remove_dir_all(&out).unwrap();
+                contents
+            })
+            .collect();
+        let names = |c: &[(String, Vec<u8>)]| c.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&contents[0]), names(&contents[1]), "{tag}");
+        assert!(
+            names(&contents[0]).iter().filter(|n| n.ends_with(".vtu")).count() >= 4,
+            "{tag}: {:?}",
+            names(&contents[0])
+        );
+        for ((name, one), (_, two)) in contents[0].iter().zip(&contents[1]) {
+            assert!(one == two, "{tag}: {name} differs between 1 and 2 threads");
+        }
+    }
+}
