@@ -234,13 +234,65 @@ fn main() -> ExitCode {
     match execute(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", chain(&e));
             match e.downcast_ref::<thermocontact::Error>() {
                 // 130 / 143, as the shell reports a process ended by SIGINT / SIGTERM.
                 Some(thermocontact::Error::Interrupted { cause, .. }) => ExitCode::from(cause.exit_code()),
                 _ => ExitCode::FAILURE,
             }
         }
+    }
+}
+
+/// The error and its causes, joined by ": ", each cause once: a message that already quotes its
+/// cause (`cannot read x: No such file or directory (os error 2)`, as the library's errors do so
+/// that their `to_string()` is complete) is not followed by that cause again.
+fn chain(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    let mut previous = String::new();
+    for cause in error.chain() {
+        let message = cause.to_string();
+        if !previous.is_empty() && previous.contains(&message) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&message);
+        previous = message;
+    }
+    text
+}
+
+/// What a stopped run left in its folder, for the message after its error: only the files that
+/// are there (a run that fails before its first step has written no checkpoint, or nothing).
+fn stopped_run_hint(out: &std::path::Path) -> String {
+    let has = |name: &str| out.join(name).is_file();
+    let mut left = Vec::new();
+    if has("solution.pvd") {
+        left.push("solution.pvd with the frames so far and the last completed step".to_string());
+    }
+    if has(driver::CHECKPOINT_FILE) {
+        left.push(format!(
+            "{} to continue with `thermocontact run --restart {}`",
+            driver::CHECKPOINT_FILE,
+            out.display()
+        ));
+    }
+    if has("summary.json") {
+        left.push("summary.json with the status and the reason".to_string());
+    }
+    if left.is_empty() {
+        format!(
+            "the run stopped before it wrote any result into {}/ (nothing to continue from)",
+            out.display()
+        )
+    } else {
+        format!(
+            "the run stopped; what it computed is in {}/ ({})",
+            out.display(),
+            left.join(", ")
+        )
     }
 }
 
@@ -341,13 +393,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
                 .inspect_err(|error| match error {
                     thermocontact::Error::Folder(_) | thermocontact::Error::Checkpoint(_) => {}
-                    _ => eprintln!(
-                        "the run stopped; what it computed is in {}/ (solution.pvd with the last completed \
-                         step, checkpoint.bin to continue with `thermocontact run --restart {}`, summary.json \
-                         with the status and the reason)",
-                        out.display(),
-                        out.display()
-                    ),
+                    _ => eprintln!("{}", stopped_run_hint(&out)),
                 })?;
             print_summary(&summary);
             println!(

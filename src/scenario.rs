@@ -581,10 +581,25 @@ impl Scenario {
                 "`file` or the cell counts nx, ny (and nz) with geometry.lengths",
             )
         })?;
-        Ok(match s.cells.as_slice() {
-            [nx, ny] => mesh::rectangle(s.lengths[0], s.lengths[1], *nx, *ny),
-            [nx, ny, nz] => mesh::cuboid([s.lengths[0], s.lengths[1], s.lengths[2]], [*nx, *ny, *nz]),
-            _ => unreachable!("validated: 2 or 3 cell counts"),
+        let generated = match (s.lengths.as_slice(), s.cells.as_slice()) {
+            ([lx, ly], [nx, ny]) => mesh::try_rectangle(*lx, *ly, *nx, *ny),
+            ([lx, ly, lz], [nx, ny, nz]) => mesh::try_cuboid([*lx, *ly, *lz], [*nx, *ny, *nz]),
+            _ => {
+                return Err(invalid(
+                    "geometry.lengths",
+                    &s.lengths,
+                    "2 lengths with mesh.nx, mesh.ny (rectangle) or 3 with mesh.nx, mesh.ny, mesh.nz (box)",
+                ))
+            }
+        };
+        // Validation bounds the cells' shape; this catches what it does not foresee (a scenario
+        // changed after validation), naming the keys rather than panicking.
+        generated.map_err(|e| Error::InvalidValue {
+            key: "geometry.lengths".to_string(),
+            value: format!("{:?} with the cell counts {:?}", s.lengths, s.cells),
+            expected: format!(
+                "a box whose generated mesh is valid (change geometry.lengths or mesh.nx, mesh.ny, mesh.nz): {e}"
+            ),
         })
     }
 
@@ -836,15 +851,52 @@ impl Scenario {
             }
         }
         match (d, self.mesh.nz) {
-            (3, None) => Err(invalid(
-                "mesh.nz",
-                &"(missing)",
-                "a cell count for the box's z direction",
-            )),
-            (3, Some(nz)) => at_least_one("mesh.nz", nz),
-            (2, Some(nz)) => Err(invalid("mesh.nz", &nz, "no nz for a rectangle (2 lengths)")),
-            _ => Ok(()),
+            (3, None) => {
+                return Err(invalid(
+                    "mesh.nz",
+                    &"(missing)",
+                    "a cell count for the box's z direction",
+                ))
+            }
+            (3, Some(nz)) => at_least_one("mesh.nz", nz)?,
+            (2, Some(nz)) => return Err(invalid("mesh.nz", &nz, "no nz for a rectangle (2 lengths)")),
+            _ => {}
         }
+        self.validate_cell_shape()
+    }
+
+    /// The structured mesh's cells no more elongated than [`MAX_CELL_ASPECT`]: within the
+    /// length range, a box of 1e-6 × 1e6 would otherwise give cells that the mesh's check finds
+    /// degenerate (or a step matrix singular in floating point).
+    fn validate_cell_shape(&self) -> Result<(), Error> {
+        let Some(s) = self.structured() else {
+            return Ok(());
+        };
+        let sides: Vec<f64> = s.lengths.iter().zip(&s.cells).map(|(&l, &n)| l / n as f64).collect();
+        let longest = sides.iter().cloned().fold(0.0, f64::max);
+        let shortest = sides.iter().cloned().fold(f64::INFINITY, f64::min);
+        let ratio = longest / shortest;
+        if ratio <= MAX_CELL_ASPECT {
+            return Ok(());
+        }
+        let names = &["mesh.nx", "mesh.ny", "mesh.nz"][..s.cells.len()];
+        let counts: Vec<String> = s.cells.iter().map(usize::to_string).collect();
+        let sizes: Vec<String> = sides.iter().map(|h| format!("{h:.3e}")).collect();
+        Err(Error::InvalidValue {
+            key: "geometry.lengths".to_string(),
+            value: format!(
+                "{:?} with {} = {}, cells of {}",
+                s.lengths,
+                names.join(" × "),
+                counts.join(" × "),
+                sizes.join(" × ")
+            ),
+            expected: format!(
+                "cells whose longest side is at most {MAX_CELL_ASPECT:e} times their shortest, not {ratio:.1e} times: \
+                 change geometry.lengths or the cell counts {}",
+                names.join(", ")
+            ),
+        })
     }
 
     fn neumann_part(&self, key: &str, part: &str) -> Result<(), Error> {
@@ -1090,6 +1142,11 @@ pub const MAX_MAGNITUDE: f64 = 1e18;
 
 /// The sane range of the box's lengths [m, or the unit of the lengths].
 pub const LENGTH_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// The most elongated cell of a structured mesh: its longest side over its shortest. Far
+/// inside what [`Mesh::new`](crate::mesh::Mesh::new) accepts (about 4·10⁵ for the worst
+/// tetrahedra of a box), and beyond any mesh a sane model needs.
+pub const MAX_CELL_ASPECT: f64 = 1e4;
 
 /// The most output times a scenario may list.
 pub const MAX_OUTPUT_TIMES: usize = 100_000;

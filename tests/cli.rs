@@ -108,3 +108,303 @@ fn readme_shows_the_default_scenario_verbatim() {
         ".ci/run runs the README's test command"
     );
 }
+
+/// Boxes within the length range whose cells are too elongated for a mesh: a clean error
+/// naming the keys and the bound, exit 1 (they panicked with exit 101 before).
+#[test]
+fn elongated_boxes_are_refused_naming_the_lengths_and_the_cell_counts() {
+    let paper3d = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/paper3d.toml");
+    let cases: [(&[&str], &str); 2] = [
+        (&["--set", "geometry.lengths=[1e-6,1e6]"], "mesh.nx, mesh.ny"),
+        (
+            &[
+                paper3d,
+                "--set",
+                "geometry.lengths=[1e-4,1.0,1e4]",
+                "--set",
+                "mesh.nx=4",
+                "--set",
+                "mesh.ny=2",
+                "--set",
+                "mesh.nz=2",
+                "--set",
+                "time.steps=4",
+            ],
+            "mesh.nx, mesh.ny, mesh.nz",
+        ),
+    ];
+    for (args, counts) in cases {
+        let out = scratch("elongated");
+        let result = bin()
+            .args(["run", "--quiet"])
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains("`geometry.lengths`") && stderr.contains(counts) && stderr.contains("at most 1e4 times"),
+            "{stderr}"
+        );
+        assert!(!out.exists(), "nothing is written for an invalid scenario");
+    }
+}
+
+/// An OS error is printed once, not once by the message that quotes it and again as its cause.
+#[test]
+fn os_errors_are_printed_once() {
+    let file = scratch("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let result = bin().args(["run", "--quiet", "--out"]).arg(&file).output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("cannot use") && stderr.contains("as the output folder"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches("(os error").count(), 1, "{stderr}");
+    std::fs::remove_file(&file).unwrap();
+
+    let missing = scratch("no-such-run");
+    let result = bin()
+        .args(["run", "--quiet", "--restart"])
+        .arg(&missing)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("scenario.toml"), "{stderr}");
+    assert_eq!(stderr.matches("(os error").count(), 1, "{stderr}");
+}
+
+/// A run that fails before its first step has written no checkpoint (nor anything else):
+/// the message after the error says so instead of pointing at `checkpoint.bin`.
+#[test]
+fn a_run_that_fails_before_its_first_step_points_at_no_checkpoint() {
+    let out = scratch("singular");
+    let result = bin()
+        .args(["run", "--quiet", "--set", "material.thermal_expansion=1e18", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("factoring the step matrix failed"), "{stderr}");
+    assert!(!out.join("checkpoint.bin").exists());
+    assert!(
+        !stderr.contains("checkpoint.bin") && !stderr.contains("--restart"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("before it wrote any result"), "{stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// Batch runs (stderr not a terminal): progress lines with the step, t, iterations, cutbacks,
+/// slip and stick counts, elapsed and remaining time; steps.csv with a row per step that has
+/// the slip and stick counts, the increments and the law residual.
+#[test]
+fn batch_runs_log_progress_lines_and_steps_csv_has_slip_and_stick_counts() {
+    let out = scratch("batch");
+    let result = bin()
+        .args([
+            "run",
+            "--set",
+            "mesh.nx=16",
+            "--set",
+            "mesh.ny=4",
+            "--set",
+            "time.steps=16",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("step ") && l.contains("/16 t = "))
+        .collect();
+    // One line per output time (4), the last one at the end.
+    assert_eq!(lines.len(), 4, "{stderr}");
+    assert!(lines[3].starts_with("step 16/16 t = 1.000000: "), "{stderr}");
+    for line in &lines {
+        for part in [
+            " convexification, ",
+            " inner, ",
+            " Newton, ",
+            " steps cut back so far; ",
+            " slip, ",
+            " stick; ",
+            "law residual ",
+            "elapsed ",
+            "remaining ",
+        ] {
+            assert!(line.contains(part), "`{part}` missing in: {line}");
+        }
+    }
+
+    let steps = std::fs::read_to_string(out.join("steps.csv")).unwrap();
+    let mut rows = steps.lines();
+    let header: Vec<&str> = rows.next().unwrap().split(',').collect();
+    for column in [
+        "n",
+        "t",
+        "convexification",
+        "krylov",
+        "increment_u",
+        "increment_theta",
+        "increment_xi",
+        "increment_zeta",
+        "law_residual",
+        "slip",
+        "stick",
+        "seconds",
+    ] {
+        assert!(header.contains(&column), "{column} missing: {header:?}");
+    }
+    let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let contact_nodes = summary["contact_nodes"].as_u64().unwrap();
+    let rows: Vec<Vec<&str>> = rows.map(|r| r.split(',').collect()).collect();
+    assert_eq!(rows.len(), 16);
+    for row in &rows {
+        let count = |name: &str| row[column(name)].parse::<u64>().unwrap();
+        assert_eq!(count("slip") + count("stick"), contact_nodes, "{row:?}");
+    }
+    // At the output times, the counts of the summary (and of the contact CSVs).
+    for o in summary["outputs"].as_array().unwrap() {
+        let row = &rows[o["n"].as_u64().unwrap() as usize - 1];
+        assert_eq!(row[column("slip")], o["slip_nodes"].to_string(), "{row:?}");
+        assert_eq!(row[column("stick")], o["stick_nodes"].to_string(), "{row:?}");
+    }
+    // The paper's solver measures the increments (77)–(80): each within its tolerance.
+    let paper = scratch("batch-paper");
+    let result = bin()
+        .args([
+            "run",
+            "--quiet",
+            "--set",
+            "solver.kind=paper",
+            "--set",
+            "mesh.nx=8",
+            "--set",
+            "mesh.ny=2",
+        ])
+        .args(["--set", "time.steps=4", "--out"])
+        .arg(&paper)
+        .output()
+        .unwrap();
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    let steps = std::fs::read_to_string(paper.join("steps.csv")).unwrap();
+    for row in steps.lines().skip(1) {
+        let row: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+        for name in ["increment_u", "increment_theta", "increment_xi", "increment_zeta"] {
+            let value = row[column(name)];
+            assert!((0.0..=1e-6).contains(&value), "{name} = {value}");
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+    std::fs::remove_dir_all(&paper).ok();
+}
+
+/// The files of a folder, each as the bytes that must not depend on the thread count:
+/// steps.csv without its `seconds` column, summary.json without the run id, timings and peak
+/// memory, every other file (frames, contact CSVs, the .pvd, scenario.toml) as it is.
+fn thread_independent_contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| !name.starts_with('.'))
+        .map(|name| {
+            let bytes = std::fs::read(dir.join(&name)).unwrap();
+            let bytes = match name.as_str() {
+                "steps.csv" => {
+                    let text = String::from_utf8(bytes).unwrap();
+                    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+                    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
+                    let kept: Vec<String> = text
+                        .lines()
+                        .map(|line| {
+                            let mut cells: Vec<&str> = line.split(',').collect();
+                            cells.remove(seconds);
+                            cells.join(",")
+                        })
+                        .collect();
+                    kept.join("\n").into_bytes()
+                }
+                "summary.json" => {
+                    let mut summary: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+                    let map = summary.as_object_mut().unwrap();
+                    for machine in ["run_id", "timings", "peak_memory_mib"] {
+                        assert!(map.remove(machine).is_some(), "{machine}");
+                    }
+                    serde_json::to_vec_pretty(&summary).unwrap()
+                }
+                _ => bytes,
+            };
+            (name, bytes)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// Bitwise reproducible on any thread count: the CLI run on 1 and on 2 threads writes the same
+/// files, byte for byte (less the wall times and the run id), in 2D and 3D.
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let paper3d = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/paper3d.toml");
+    let cases: [(&str, Vec<&str>); 2] = [
+        (
+            "2d",
+            vec!["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"],
+        ),
+        (
+            "3d",
+            vec![
+                paper3d,
+                "--set",
+                "mesh.nx=8",
+                "--set",
+                "mesh.ny=2",
+                "--set",
+                "mesh.nz=2",
+                "--set",
+                "time.steps=4",
+            ],
+        ),
+    ];
+    for (tag, args) in cases {
+        let contents: Vec<Vec<(String, Vec<u8>)>> = ["1", "2"]
+            .iter()
+            .map(|threads| {
+                let out = scratch(&format!("threads-{tag}-{threads}"));
+                let result = bin()
+                    .env("RAYON_NUM_THREADS", threads)
+                    .args(["run", "--quiet"])
+                    .args(&args)
+                    .arg("--out")
+                    .arg(&out)
+                    .output()
+                    .unwrap();
+                assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+                let contents = thread_independent_contents(&out);
+                std::fs::remove_dir_all(&out).unwrap();
+                contents
+            })
+            .collect();
+        let names = |c: &[(String, Vec<u8>)]| c.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&contents[0]), names(&contents[1]), "{tag}");
+        assert!(
+            names(&contents[0]).iter().filter(|n| n.ends_with(".vtu")).count() >= 4,
+            "{tag}: {:?}",
+            names(&contents[0])
+        );
+        for ((name, one), (_, two)) in contents[0].iter().zip(&contents[1]) {
+            assert!(one == two, "{tag}: {name} differs between 1 and 2 threads");
+        }
+    }
+}

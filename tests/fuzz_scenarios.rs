@@ -274,3 +274,71 @@ fn mutated_scenarios_end_in_a_clean_error_or_a_finite_run() {
         failures[0]
     );
 }
+
+/// Boxes at the ends of the length range, with few and many cells: the lengths alone pass, but
+/// cells longer than wide by 10⁸ and more are degenerate for the mesh (these panicked). Each
+/// case ends in a clean error naming `geometry.lengths` and the cell counts, or in a finite run.
+#[test]
+fn elongated_boxes_end_in_a_clean_error_or_a_finite_run() {
+    let ends = [1e-6, 1e-4, 1e-2, 1.0, 1e2, 1e4, 1e6];
+    let mut cases: Vec<(Vec<f64>, Vec<usize>)> = vec![
+        // The cases found by hand: the default 128 × 32 cells, and a small box.
+        (vec![1e-6, 1e6], vec![128, 32]),
+        (vec![1e-4, 1.0, 1e4], vec![4, 2, 2]),
+    ];
+    for &a in &ends {
+        for &b in &ends {
+            for cells in [[1, 1], [8, 2], [2, 8]] {
+                cases.push((vec![a, b], cells.to_vec()));
+            }
+            for &c in &[1e-6, 1.0, 1e6] {
+                cases.push((vec![a, b, c], vec![2, 1, 1]));
+            }
+        }
+    }
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let (mut refused, mut ran, mut failed) = (0, 0, 0);
+    let mut problems = Vec::new();
+    for (lengths, cells) in &cases {
+        let names = ["mesh.nx", "mesh.ny", "mesh.nz"];
+        let mut overrides = vec![format!("geometry.lengths={lengths:?}"), "time.steps=2".to_string()];
+        overrides.extend(cells.iter().zip(names).map(|(n, key)| format!("{key}={n}")));
+        let outcome = catch_unwind(AssertUnwindSafe(|| {
+            let base = if lengths.len() == 3 { Some(PAPER_3D) } else { None };
+            match Scenario::load(base, &overrides) {
+                Err(e) => Err(e.to_string()),
+                Ok(scenario) => Ok(scenario.run_quiet().map(|(_, state)| {
+                    state
+                        .u
+                        .iter()
+                        .chain(&state.w)
+                        .chain(&state.theta)
+                        .all(|v| v.is_finite())
+                })),
+            }
+        }));
+        match outcome {
+            Err(_) => problems.push(format!("{overrides:?}: panicked")),
+            Ok(Err(message)) => {
+                let named = message.contains("geometry.lengths") && message.contains("mesh.nx");
+                if named {
+                    refused += 1;
+                } else {
+                    problems.push(format!("{overrides:?}: refused without naming the keys: {message}"));
+                }
+            }
+            Ok(Ok(Ok(true))) => ran += 1,
+            Ok(Ok(Ok(false))) => problems.push(format!("{overrides:?}: non-finite fields")),
+            Ok(Ok(Err(e))) if !e.to_string().is_empty() => failed += 1,
+            Ok(Ok(Err(_))) => problems.push(format!("{overrides:?}: an empty error message")),
+        }
+    }
+    std::panic::set_hook(hook);
+    eprintln!(
+        "{} boxes: {refused} refused, {failed} stopped with an error, {ran} ran",
+        cases.len()
+    );
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert!(refused > 0 && ran > 0, "{refused} refused, {ran} ran");
+}

@@ -168,15 +168,24 @@ fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted
     same_bytes(&whole, &dir, &frames);
     let csvs: Vec<String> = (1..=8).map(|i| format!("contact_{:04}.csv", 2 * i)).collect();
     same_bytes(&whole, &dir, &csvs);
-    // The whole run's figures, not the continued part's.
+    // The whole run's figures, not the continued part's: the iterations, and the loop's work
+    // (linear solves and sweeps, Krylov iterations), which the checkpoint carries.
     assert_eq!(
         continued.convexification_iterations,
         reference.convexification_iterations
     );
+    assert!(reference.linear_solves > 0 && reference.full_sweeps > 0);
+    assert_eq!(continued.linear_solves, reference.linear_solves);
+    assert_eq!(continued.full_sweeps, reference.full_sweeps);
+    assert_eq!(continued.krylov_iterations, reference.krylov_iterations);
+    for key in ["linear_solves", "full_sweeps", "krylov_iterations", "newton_iterations"] {
+        assert_eq!(summary(&dir)[key], summary(&whole)[key], "{key}");
+    }
     assert_eq!(continued.outputs.len(), reference.outputs.len());
-    let lines = |d: &Path| std::fs::read_to_string(d.join("steps.csv")).unwrap().lines().count();
-    assert_eq!(lines(&dir), lines(&whole));
-    assert_eq!(lines(&dir), 17);
+    // steps.csv: every row as the uninterrupted run's, bit for bit, but the wall times (the
+    // rows before the stop travel through the checkpoint's JSON header).
+    assert_eq!(steps_without_seconds(&dir), steps_without_seconds(&whole));
+    assert_eq!(steps_without_seconds(&dir).len(), 17);
 
     // A checkpoint of another problem is refused, naming what differs.
     let other = coarse(&["material.density=50"]);
@@ -197,6 +206,20 @@ fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted
     for d in [whole, dir, stopped_again] {
         std::fs::remove_dir_all(d).unwrap();
     }
+}
+
+/// The lines of `steps.csv` without the `seconds` column (the one that depends on the machine).
+fn steps_without_seconds(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("steps.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
+    text.lines()
+        .map(|line| {
+            let mut cells: Vec<&str> = line.split(',').collect();
+            cells.remove(seconds);
+            cells.join(",")
+        })
+        .collect()
 }
 
 /// A checkpoint of `problem` at step 3, written into `dir` by a run stopped there.
@@ -302,6 +325,78 @@ fn the_cli_stops_on_sigterm_survives_sigkill_and_restarts() {
         std::fs::remove_dir_all(&dir).unwrap();
     }
     std::fs::remove_dir_all(&whole).unwrap();
+}
+
+/// A failed run continued to the end leaves no checkpoint, even without `checkpoint_every`
+/// (a stale one made `--restart` silently compute the end again), and the folder it leaves is
+/// refused without the offer to `--restart` it (there is nothing to continue).
+#[test]
+fn a_failed_run_continued_to_the_end_leaves_no_checkpoint() {
+    let dir = scratch("cli-failed");
+    let small = ["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"];
+    let failing = [
+        "--set",
+        "solver.cutback=false",
+        "--set",
+        "solver.max_sweeps=0",
+        "--set",
+        "solver.max_convexification=5",
+    ];
+    let failed = bin()
+        .args(["run", "--quiet"])
+        .args(small)
+        .args(failing)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert_eq!(failed.status.code(), Some(1), "{stderr}");
+    assert_eq!(summary(&dir)["status"], "failed");
+    assert!(dir.join(CHECKPOINT_FILE).exists());
+    assert!(
+        stderr.contains(&format!(
+            "checkpoint.bin to continue with `thermocontact run --restart {}`",
+            dir.display()
+        )),
+        "{stderr}"
+    );
+
+    let continued = bin()
+        .args(["run", "--quiet", "--restart"])
+        .arg(&dir)
+        .args(["--set", "solver.max_convexification=200"])
+        .output()
+        .unwrap();
+    assert!(
+        continued.status.success(),
+        "{}",
+        String::from_utf8_lossy(&continued.stderr)
+    );
+    assert_eq!(summary(&dir)["status"], "completed");
+    assert!(
+        !dir.join(CHECKPOINT_FILE).exists(),
+        "a completed run keeps no checkpoint"
+    );
+
+    let again = bin()
+        .args(["run", "--quiet"])
+        .args(small)
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("holds the results of another run") && stderr.contains("--overwrite"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("--restart"),
+        "no checkpoint to continue from: {stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `initial.from`: a checkpoint's fields become the initial data of another run on the same

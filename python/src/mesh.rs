@@ -168,7 +168,9 @@ impl PyMesh {
                 format!("rectangle({lx}, {ly}, {nx}, {ny}): expected positive lengths and cell counts"),
             ));
         }
-        Ok(PyMesh::wrap(mesh::rectangle(lx, ly, nx, ny)))
+        mesh::try_rectangle(lx, ly, nx, ny)
+            .map(PyMesh::wrap)
+            .map_err(|e| errors::mesh_error(py, e))
     }
 
     /// Mesh.box(lengths, cells) -> Mesh: the box (0, L₁) × (0, L₂) × (0, L₃) in n₁ × n₂ × n₃
@@ -182,7 +184,9 @@ impl PyMesh {
                 format!("box({lengths:?}, {cells:?}): expected positive lengths and cell counts"),
             ));
         }
-        Ok(PyMesh::wrap(mesh::cuboid(lengths, cells)))
+        mesh::try_cuboid(lengths, cells)
+            .map(PyMesh::wrap)
+            .map_err(|e| errors::mesh_error(py, e))
     }
 
     /// Mesh.annulus(inner_radius, outer_radius, n_radial, n_around) -> Mesh: a ring of
@@ -204,12 +208,9 @@ impl PyMesh {
                 ),
             ));
         }
-        Ok(PyMesh::wrap(mesh::annulus(
-            inner_radius,
-            outer_radius,
-            n_radial,
-            n_around,
-        )))
+        mesh::try_annulus(inner_radius, outer_radius, n_radial, n_around)
+            .map(PyMesh::wrap)
+            .map_err(|e| errors::mesh_error(py, e))
     }
 
     /// Space dimension d (2 or 3).

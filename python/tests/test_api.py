@@ -144,6 +144,17 @@ def test_bad_meshes_raise_mesh_errors_that_say_what(change, words):
     assert all(w in str(raised.value) for w in words), str(raised.value)
 
 
+def test_generated_meshes_with_degenerate_cells_raise_mesh_errors():
+    # Cells 10¹² times longer than wide: an error, not a panic.
+    for make in (
+        lambda: tc.Mesh.rectangle(1e-6, 1e6, 128, 32),
+        lambda: tc.Mesh.box([1e-4, 1.0, 1e4], [4, 2, 2]),
+        lambda: tc.Mesh.annulus(1e-6, 1e6, 1, 64),
+    ):
+        with pytest.raises(tc.MeshError, match="degenerate"):
+            make()
+
+
 def test_meshio_meshes_and_msh_files_round_trip(tmp_path):
     meshio = pytest.importorskip("meshio")
     original = renamed_rectangle(4, 2)

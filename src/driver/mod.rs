@@ -33,7 +33,7 @@ use crate::output::folder::{Existing, RunFolder};
 use crate::output::{self, fields, Compression, Field, Grid, PvdEntry};
 use crate::problem::Problem;
 use crate::solver::system::State;
-use crate::solver::{LinearKind, SolverParams, StepInfo};
+use crate::solver::{LinearKind, SolverKind, SolverParams, StepInfo};
 use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolver, Stopped};
 
 pub use stop::StopFlag;
@@ -75,7 +75,7 @@ impl Restart {
 }
 
 /// The checkpoint's file name in an output folder.
-pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+pub const CHECKPOINT_FILE: &str = crate::output::folder::CHECKPOINT_FILE;
 
 /// What a run records, and when.
 #[derive(Debug, Clone, PartialEq)]
@@ -169,8 +169,8 @@ impl Setup<'_> {
             descent_sweeps: tally.descent_sweeps,
             krylov_iterations: tally.krylov_iterations,
             linear: self.linear.name().to_string(),
-            linear_solves: 0,
-            full_sweeps: 0,
+            linear_solves: tally.solve_equivalents(),
+            full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
             peak_memory_mib: crate::bench::peak_memory_mib(),
             max_law_residual: tally.max_law_residual,
@@ -274,6 +274,9 @@ pub fn run_observed(
             (checkpoint.state.clone(), tally)
         }
     };
+    // The loop's linear work before this process (a continued run's checkpoint has it): the
+    // tally adds this process's to it wherever it is saved.
+    let (solves_before, sweeps_before) = (tally.solves, tally.sweeps);
 
     // Claim the folder before the expensive set-up: a refused folder fails at once.
     let files = match &options.out_dir {
@@ -307,6 +310,11 @@ pub fn run_observed(
         plan,
         factor_nnz: levels.first().factor_nnz(),
         linear: levels.first().linear(),
+    };
+    let count_work = |tally: &mut Tally| {
+        let stats = levels.step_stats();
+        tally.solves = solves_before + stats.solves;
+        tally.sweeps = sweeps_before + stats.sweeps;
     };
 
     if let Some(files) = &files {
@@ -364,9 +372,10 @@ pub fn run_observed(
     }
     let loop_clock = Instant::now();
     let mut step_clock = Instant::now();
+    let first_step = first.n;
     let marched = time::march_from(problem, &levels, first, |state, info| {
         observer(problem, state, info);
-        let residual = law_residual(problem, state, plan.slip_tolerance);
+        let (residual, slip_nodes) = law_residual(problem, state, plan.slip_tolerance);
         let step_record = StepRecord {
             n: state.n,
             t: state.t,
@@ -377,7 +386,15 @@ pub fn run_observed(
             krylov_iterations: info.krylov_iterations,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
+            // Only the paper's solver measures (77)–(80); the fast solver stops on the nodal
+            // law and leaves them unset, which a 0 would misreport as converged.
+            increments: match params.kind {
+                SolverKind::Paper => info.increments,
+                SolverKind::Fast => [f64::NAN; 4],
+            },
             law_residual: residual,
+            slip_nodes,
+            stick_nodes: problem.contact.len() - slip_nodes,
             seconds: step_clock.elapsed().as_secs_f64(),
         };
         tally.add_step(info, step_record);
@@ -413,6 +430,7 @@ pub fn run_observed(
         }
         if let (Some(files), Some(every)) = (&files, plan.checkpoint_every) {
             if state.n % every == 0 && state.n < n_steps {
+                count_work(&mut tally);
                 files.checkpoint(state, &tally)?;
                 files.steps(&tally)?;
                 files.summary(&setup.summary(&tally, RunStatus::Running, None, timings.clone()))?;
@@ -421,17 +439,18 @@ pub fn run_observed(
         output_time += clock.elapsed().as_secs_f64();
         if batch && (is_output || state.n == n_steps || last_line.elapsed().as_secs_f64() >= 10.0) {
             last_line = Instant::now();
+            // The remaining steps at this process's pace so far.
+            let done = state.n - first_step;
+            let remaining = loop_clock.elapsed().as_secs_f64() / done.max(1) as f64 * (n_steps - state.n) as f64;
             eprintln!(
-                "step {}/{} t = {:.6}: {} convexification, {} inner, {} Newton, {} sweeps, law residual {:.1e} ({:.2} s)",
-                state.n,
-                n_steps,
-                state.t,
-                info.convexification_iterations,
-                info.inner_iterations,
-                info.newton_iterations,
-                info.descent_sweeps,
-                residual,
-                step_record.seconds
+                "{}",
+                progress_line(&ProgressLine {
+                    record: &step_record,
+                    steps: n_steps,
+                    cutbacks: tally.cutbacks.len(),
+                    elapsed: start.elapsed().as_secs_f64(),
+                    remaining,
+                })
             );
         }
         if let Some(cause) = options.stop.as_ref().and_then(StopFlag::requested) {
@@ -464,6 +483,7 @@ pub fn run_observed(
     timings.contact_solver =
         timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
 
+    count_work(&mut tally);
     let status = RunStatus::of(failure.as_ref());
     let failure_record = failure.as_ref().map(|e| FailureRecord::new(e, &state));
     let written = match &files {
@@ -481,26 +501,26 @@ pub fn run_observed(
                         let record = record(problem, &state, plan.slip_tolerance);
                         files.frame(&state, &record, &mut tally)?;
                     }
-                } else if plan.checkpoint_every.is_some() {
-                    // A completed run's checkpoint is of no use any more.
-                    let _ = std::fs::remove_file(files.dir().join(CHECKPOINT_FILE));
+                } else {
+                    // A completed run's checkpoint is of no use any more, whether this run wrote
+                    // it (`checkpoint_every`) or the stopped run it continued did; left in place,
+                    // `--restart` would silently compute the end again from it.
+                    match std::fs::remove_file(files.dir().join(CHECKPOINT_FILE)) {
+                        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(files.io(CHECKPOINT_FILE)(e)),
+                        _ => {}
+                    }
                 }
                 files.steps(&tally)?;
                 timings.output = output_time + clock.elapsed().as_secs_f64();
                 timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-                let mut summary = setup.summary(&tally, status, failure_record.clone(), timings.clone());
-                summary.linear_solves = loop_stats.solve_equivalents();
-                summary.full_sweeps = loop_stats.full_sweeps();
-                files.summary(&summary)
+                files.summary(&setup.summary(&tally, status, failure_record.clone(), timings.clone()))
             })()
         }
         None => Ok(()),
     };
     timings.output = timings.output.max(output_time);
     timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-    let mut summary = setup.summary(&tally, status, failure_record, timings);
-    summary.linear_solves = loop_stats.solve_equivalents();
-    summary.full_sweeps = loop_stats.full_sweeps();
+    let summary = setup.summary(&tally, status, failure_record, timings);
     match (failure, written) {
         // The error that stopped the run comes first; one met while recording it is logged.
         (Some(error), written) => {
@@ -519,17 +539,75 @@ fn frame_tag(n: usize) -> String {
     format!("_{n:04}.")
 }
 
-/// The largest nodal friction-law residual of a state on Γ_C, relative to μ(0)S.
-fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> f64 {
+/// The largest nodal friction-law residual of a state on Γ_C, relative to μ(0)S, and the
+/// number of Γ_C nodes that slip (|w_τ| > the slip tolerance, as in the contact CSV).
+fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> (f64, usize) {
     let law = problem.friction.as_ref();
     let tangential = problem.dim() - 1;
     let w_tau = crate::solver::paper::contact_tangential(problem, &state.w);
-    let worst = w_tau
-        .chunks_exact(tangential)
-        .zip(state.xi.chunks_exact(tangential))
-        .map(|(w, xi)| crate::contact::friction::law_residual(law, w, xi, slip_tolerance))
-        .fold(0.0, f64::max);
-    worst / law.bound(0.0).max(f64::MIN_POSITIVE)
+    let mut worst: f64 = 0.0;
+    let mut slip = 0;
+    for (w, xi) in w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential)) {
+        worst = worst.max(crate::contact::friction::law_residual(law, w, xi, slip_tolerance));
+        slip += usize::from(crate::solver::system::norm2(w) > slip_tolerance);
+    }
+    (worst / law.bound(0.0).max(f64::MIN_POSITIVE), slip)
+}
+
+/// What a batch run's progress line tells.
+struct ProgressLine<'a> {
+    record: &'a StepRecord,
+    steps: usize,
+    /// Steps cut back so far.
+    cutbacks: usize,
+    /// Seconds since the run started, and the estimate of those still to come.
+    elapsed: f64,
+    remaining: f64,
+}
+
+/// A batch run's progress line: the step and t, the step's iterations, the cutbacks so far,
+/// the slip and stick counts, the law residual, and the elapsed and remaining time.
+fn progress_line(p: &ProgressLine) -> String {
+    let r = p.record;
+    let mut iterations = format!(
+        "{} convexification, {} inner, {} Newton, {} sweeps",
+        r.convexification_iterations, r.inner_iterations, r.newton_iterations, r.descent_sweeps
+    );
+    if r.krylov_iterations > 0 {
+        iterations.push_str(&format!(", {} Krylov", r.krylov_iterations));
+    }
+    let cut = match r.cutback_depth {
+        0 => String::new(),
+        depth => format!(", this one into {} substeps (k/{})", r.substeps, 1usize << depth),
+    };
+    format!(
+        "step {}/{} t = {:.6}: {iterations}; {} steps cut back so far{cut}; {} slip, {} stick; \
+         law residual {:.1e}; step {:.2} s, elapsed {}, remaining {}",
+        r.n,
+        p.steps,
+        r.t,
+        p.cutbacks,
+        r.slip_nodes,
+        r.stick_nodes,
+        r.law_residual,
+        r.seconds,
+        duration(p.elapsed),
+        duration(p.remaining)
+    )
+}
+
+/// A duration for a log line: `4.2 s`, `12 min 05 s`, `3 h 07 min`.
+fn duration(seconds: f64) -> String {
+    let s = seconds.max(0.0);
+    if s < 60.0 {
+        format!("{s:.1} s")
+    } else if s < 3600.0 {
+        let whole = s.round() as u64;
+        format!("{} min {:02} s", whole / 60, whole % 60)
+    } else {
+        let minutes = (s / 60.0).round() as u64;
+        format!("{} h {:02} min", minutes / 60, minutes % 60)
+    }
 }
 
 /// The figures of one output time.

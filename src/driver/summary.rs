@@ -89,9 +89,11 @@ pub struct Summary {
     pub descent_sweeps: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
+    /// Over the whole run: a continued run adds its own to those of the parts before (their
+    /// checkpoint carries them), failed attempts at a step included.
     pub linear_solves: usize,
     /// Triangular sweeps over all of the factor in the time loop (forward or backward; a full
-    /// solve counts two).
+    /// solve counts two), over the whole run as `linear_solves`.
     pub full_sweeps: usize,
     /// Stored entries of the LDLᵀ factor of the step matrix (direct path), or of its ILU(0)
     /// factor (iterative path).
@@ -220,15 +222,36 @@ pub struct StepRecord {
     /// Substeps taken (1: no cutback) and the deepest cutback.
     pub substeps: usize,
     pub cutback_depth: usize,
+    /// The last relative increments of u, θ, ξ, ζ of the step's solver (the left sides of the
+    /// stop criteria (77)–(80); [`StepInfo::increments`]); NaN for the fast solver, which
+    /// stops on the nodal law instead and does not measure them.
+    #[serde(default = "unmeasured", deserialize_with = "nan_from_null")]
+    pub increments: [f64; 4],
     /// The step's nodal friction-law residual, relative to μ(0)S.
     pub law_residual: f64,
+    /// Contact nodes that slip (|w_τ| > the slip tolerance) and that stick at the step's end.
+    #[serde(default)]
+    pub slip_nodes: usize,
+    #[serde(default)]
+    pub stick_nodes: usize,
     /// Wall time of the step, s.
     pub seconds: f64,
 }
 
+/// Increments not measured (and those of checkpoints written before steps.csv had them).
+fn unmeasured() -> [f64; 4] {
+    [f64::NAN; 4]
+}
+
+/// JSON writes NaN as `null`: read it back as NaN.
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<[f64; 4], D::Error> {
+    let values = <[Option<f64>; 4]>::deserialize(deserializer)?;
+    Ok(values.map(|v| v.unwrap_or(f64::NAN)))
+}
+
 impl StepRecord {
     /// The columns of `steps.csv`.
-    pub const HEADER: [&'static str; 11] = [
+    pub const HEADER: [&'static str; 17] = [
         "n",
         "t",
         "convexification",
@@ -238,13 +261,19 @@ impl StepRecord {
         "krylov",
         "substeps",
         "cutback_depth",
+        "increment_u",
+        "increment_theta",
+        "increment_xi",
+        "increment_zeta",
         "law_residual",
+        "slip",
+        "stick",
         "seconds",
     ];
 
     /// The record as a `steps.csv` row.
     pub fn row(&self) -> Vec<f64> {
-        vec![
+        let mut row = vec![
             self.n as f64,
             self.t,
             self.convexification_iterations as f64,
@@ -254,9 +283,15 @@ impl StepRecord {
             self.krylov_iterations as f64,
             self.substeps as f64,
             self.cutback_depth as f64,
+        ];
+        row.extend(self.increments);
+        row.extend([
             self.law_residual,
+            self.slip_nodes as f64,
+            self.stick_nodes as f64,
             self.seconds,
-        ]
+        ]);
+        row
     }
 }
 
@@ -275,6 +310,14 @@ pub struct Tally {
     pub descent_sweeps: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
+    /// Full solves with the step matrix in the time loop, over every part of the run (a
+    /// continued run adds its own to those of its checkpoint; 0 in checkpoints from before
+    /// they were kept).
+    #[serde(default)]
+    pub solves: usize,
+    /// Triangular sweeps over all of the factor done on their own in the time loop, likewise.
+    #[serde(default)]
+    pub sweeps: usize,
     pub max_law_residual: f64,
     pub cutbacks: Vec<CutbackRecord>,
     pub outputs: Vec<OutputRecord>,
@@ -304,6 +347,18 @@ impl Tally {
         self.krylov_iterations += info.krylov_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);
         self.steps.push(record);
+    }
+
+    /// Sweeps over all of the factor in the time loop, a full solve counting two
+    /// (`summary.json`'s `full_sweeps`).
+    pub fn full_sweeps(&self) -> usize {
+        2 * self.solves + self.sweeps
+    }
+
+    /// Full solves and their equivalents, two sweeps counting one, rounded up
+    /// (`summary.json`'s `linear_solves`).
+    pub fn solve_equivalents(&self) -> usize {
+        self.full_sweeps().div_ceil(2)
     }
 }
 

@@ -1,7 +1,7 @@
 //! A structured annulus: the ring a ≤ r ≤ b in 2D, for curved contact boundaries with known
 //! answers (a ring on a shaft: `tests/curved.rs`).
 
-use super::Mesh;
+use super::{Mesh, MeshError};
 
 /// Boundary part names of [`annulus`], in part-index order.
 pub fn annulus_part_names() -> [&'static str; 2] {
@@ -15,11 +15,24 @@ pub fn annulus_part_names() -> [&'static str; 2] {
 ///
 /// Boundary parts: `inner` (r = a) and `outer` (r = b). The circles are approximated by regular
 /// polygons through the nodes.
+///
+/// # Panics
+///
+/// Where [`try_annulus`] fails. Input from users goes through [`try_annulus`].
 pub fn annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: usize) -> Mesh {
-    assert!(
-        n_radial > 0 && n_around >= 3 && 0.0 < inner_radius && inner_radius < outer_radius,
-        "an annulus needs 0 < a < b, a cell across and three around"
-    );
+    try_annulus(inner_radius, outer_radius, n_radial, n_around).expect("a generated mesh is valid")
+}
+
+/// [`annulus`], with its conditions (0 < a < b, a cell across, three around) and the checks of
+/// [`Mesh::new`] (cells so thin that they count as degenerate, as a ring of b/a ≈ 10¹² makes
+/// them) returned as an error.
+pub fn try_annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: usize) -> Result<Mesh, MeshError> {
+    if !(n_radial > 0 && n_around >= 3 && 0.0 < inner_radius && inner_radius < outer_radius) {
+        return Err(MeshError::Invalid(format!(
+            "an annulus of radii {inner_radius}, {outer_radius} in {n_radial} × {n_around} cells: it needs \
+             0 < a < b, a cell across and three around"
+        )));
+    }
     let node = |i: usize, j: usize| i + (j % n_around) * (n_radial + 1);
     let mut coords = Vec::with_capacity((n_radial + 1) * n_around);
     for j in 0..n_around {
@@ -53,12 +66,19 @@ pub fn annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: 
         facet_parts,
         annulus_part_names().iter().map(|s| s.to_string()).collect(),
     )
-    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thin_or_impossible_rings_are_errors() {
+        let e = try_annulus(1e-6, 1e6, 1, 64).unwrap_err();
+        assert!(matches!(e, MeshError::Degenerate { .. }), "{e}");
+        assert!(try_annulus(2.0, 1.0, 1, 64).is_err());
+        assert!(try_annulus(1.0, 2.0, 1, 2).is_err());
+    }
 
     #[test]
     fn annulus_area_and_outward_normals() {

@@ -1,6 +1,6 @@
 //! Structured tetrahedral mesh of a box, the 3D counterpart of [`super::rectangle`].
 
-use super::Mesh;
+use super::{Mesh, MeshError};
 
 /// Boundary part names of [`cuboid`], in part-index order: the faces x = 0, x = L₁, y = 0,
 /// y = L₂, z = 0, z = L₃.
@@ -44,14 +44,37 @@ const KUHN: [[[usize; 3]; 4]; 6] = [
 /// Node (i, j, k) sits at (i L₁/n₁, j L₂/n₂, k L₃/n₃) and has index i + (n₁ + 1)(j + (n₂ + 1) k).
 /// Boundary parts, named as in [`cuboid_part_names`]: `x-`, `x+`, `y-`, `y+`, `z-`, `z+`; each
 /// boundary quadrilateral is two triangles, faces of the adjacent tetrahedra.
+///
+/// # Panics
+///
+/// Where [`try_cuboid`] fails: no cell in a direction, or cells so elongated that
+/// [`Mesh::new`] finds them degenerate. Input from users goes through [`try_cuboid`].
 pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
-    assert!(
-        cells.iter().all(|&n| n > 0),
-        "cuboid needs at least one cell per direction"
-    );
+    try_cuboid(lengths, cells).expect("a generated mesh is valid")
+}
+
+/// [`cuboid`], with the checks of [`Mesh::new`] returned as an error: a cell count of 0, a
+/// non-finite or non-positive length, or cells so elongated (a tetrahedron's volume ≤ 1e-12 ×
+/// its longest edge³; for cells of sides h, h, H that is H/h beyond about 4·10⁵) that they count
+/// as degenerate.
+pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshError> {
+    if cells.contains(&0) {
+        return Err(MeshError::Invalid(format!(
+            "a box of {} × {} × {} cells: it needs at least one cell per direction",
+            cells[0], cells[1], cells[2]
+        )));
+    }
     let [n1, n2, n3] = cells;
+    let counted = cells
+        .iter()
+        .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
+    let Some(nodes) = counted.filter(|n| n.checked_mul(24).is_some()) else {
+        return Err(MeshError::Invalid(format!(
+            "a box of {n1} × {n2} × {n3} cells: too many to count"
+        )));
+    };
     let node = |ijk: [usize; 3]| ijk[0] + (n1 + 1) * (ijk[1] + (n2 + 1) * ijk[2]);
-    let mut coords = Vec::with_capacity((n1 + 1) * (n2 + 1) * (n3 + 1));
+    let mut coords = Vec::with_capacity(nodes);
     for k in 0..=n3 {
         for j in 0..=n2 {
             for i in 0..=n1 {
@@ -107,7 +130,6 @@ pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
         facet_parts,
         cuboid_part_names().iter().map(|s| s.to_string()).collect(),
     )
-    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]
@@ -181,6 +203,17 @@ mod tests {
                 "face {f:?} seen {count}×"
             );
         }
+    }
+
+    #[test]
+    fn elongated_or_uncountable_boxes_are_errors() {
+        let e = try_cuboid([1e-4, 1.0, 1e4], [4, 2, 2]).unwrap_err();
+        assert!(matches!(e, MeshError::Degenerate { .. }), "{e}");
+        let e = try_cuboid([1.0; 3], [usize::MAX, 1, 1]).unwrap_err();
+        assert!(e.to_string().contains("too many"), "{e}");
+        assert!(try_cuboid([1.0; 3], [1, 0, 1]).is_err());
+        // The worst shape at an aspect ratio of 1e4 (two short sides) is still a valid mesh.
+        assert!(try_cuboid([1e-3, 1e-3, 10.0], [1, 1, 1]).is_ok());
     }
 
     #[test]

@@ -6,7 +6,8 @@
 //!
 //! Generators: [`rectangle`] (triangles, parts `left`, `right`, `bottom`, `top`), [`cuboid`]
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
-//! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`). Files: [`read_msh`] reads Gmsh
+//! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`), each with a `try_` variant that
+//! returns what [`Mesh::new`] finds wrong (too elongated cells) as an error instead of panicking. Files: [`read_msh`] reads Gmsh
 //! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
@@ -19,11 +20,11 @@ mod gmsh;
 mod structured;
 pub(crate) mod topology;
 
-pub use annulus::{annulus, annulus_part_names};
+pub use annulus::{annulus, annulus_part_names, try_annulus};
 pub use check::MeshError;
-pub use cuboid::{cuboid, cuboid_part_names};
+pub use cuboid::{cuboid, cuboid_part_names, try_cuboid};
 pub use gmsh::{msh_text, read_msh};
-pub use structured::{rectangle, rectangle_part_names};
+pub use structured::{rectangle, rectangle_part_names, try_rectangle};
 
 /// A P1 simplicial mesh in d = 2 or 3 dimensions.
 #[derive(Debug, Clone)]

@@ -1,6 +1,6 @@
 //! Structured generators.
 
-use super::Mesh;
+use super::{Mesh, MeshError};
 
 /// Boundary part names of [`rectangle`], in part-index order.
 pub fn rectangle_part_names() -> [&'static str; 4] {
@@ -16,10 +16,34 @@ pub fn rectangle_part_names() -> [&'static str; 4] {
 /// convergence study relies on for exact P1 prolongation.
 ///
 /// Boundary parts: `left` (x = 0), `right` (x = lx), `bottom` (y = 0), `top` (y = ly).
+///
+/// # Panics
+///
+/// Where [`try_rectangle`] fails: no cell in a direction, or cells so elongated that
+/// [`Mesh::new`] finds them degenerate. Input from users goes through [`try_rectangle`].
 pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
-    assert!(nx > 0 && ny > 0, "rectangle needs at least one cell per direction");
+    try_rectangle(lx, ly, nx, ny).expect("a generated mesh is valid")
+}
+
+/// [`rectangle`], with the checks of [`Mesh::new`] returned as an error: a cell count of 0, a
+/// non-finite or non-positive length, or cells so elongated (a cell's area ≤ 1e-12 × its
+/// longest edge², an aspect ratio beyond about 5·10¹¹) that they count as degenerate.
+pub fn try_rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<Mesh, MeshError> {
+    if nx == 0 || ny == 0 {
+        return Err(MeshError::Invalid(format!(
+            "a rectangle of {nx} × {ny} cells: it needs at least one cell per direction"
+        )));
+    }
+    let counted = [nx, ny]
+        .iter()
+        .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
+    let Some(nodes) = counted.filter(|n| n.checked_mul(6).is_some()) else {
+        return Err(MeshError::Invalid(format!(
+            "a rectangle of {nx} × {ny} cells: too many to count"
+        )));
+    };
     let node = |i: usize, j: usize| i + j * (nx + 1);
-    let mut coords = Vec::with_capacity((nx + 1) * (ny + 1));
+    let mut coords = Vec::with_capacity(nodes);
     for j in 0..=ny {
         for i in 0..=nx {
             coords.push([lx * i as f64 / nx as f64, ly * j as f64 / ny as f64, 0.0]);
@@ -56,7 +80,6 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
         facet_parts,
         rectangle_part_names().iter().map(|s| s.to_string()).collect(),
     )
-    .expect("a generated mesh is valid")
 }
 
 #[cfg(test)]
@@ -72,6 +95,16 @@ mod tests {
         assert!((mesh.volume() - 400.0).abs() < 1e-10);
         let bottom = mesh.part_index("bottom").unwrap();
         assert_eq!(mesh.nodes_on(&[bottom]).iter().filter(|&&b| b).count(), 9);
+    }
+
+    #[test]
+    fn elongated_or_uncountable_rectangles_are_errors() {
+        let e = try_rectangle(1e-6, 1e6, 128, 32).unwrap_err();
+        assert!(matches!(e, MeshError::Degenerate { .. }), "{e}");
+        let e = try_rectangle(1.0, 1.0, usize::MAX, 2).unwrap_err();
+        assert!(e.to_string().contains("too many"), "{e}");
+        assert!(try_rectangle(1.0, 1.0, 0, 2).is_err());
+        assert!(try_rectangle(1e-3, 10.0, 1, 1).is_ok(), "an aspect ratio of 1e4");
     }
 
     #[test]

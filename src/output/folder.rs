@@ -19,6 +19,9 @@ use std::path::{Path, PathBuf};
 /// The lock file's name.
 pub const LOCK_FILE: &str = ".thermocontact.lock";
 
+/// The checkpoint's file name in an output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+
 /// What a run may do with the results of another run it finds in its folder.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Existing {
@@ -43,11 +46,15 @@ pub enum FolderError {
     )]
     Locked { dir: PathBuf, holder: String },
     #[error(
-        "{} holds the results of another run ({found}); pass --overwrite to replace them, \
-         `--restart {}` to continue that run from its checkpoint, or choose another --out",
-        dir.display(), dir.display()
+        "{} holds the results of another run ({found}); pass --overwrite to replace them{}, or choose another --out",
+        dir.display(), restart_phrase(dir, *restartable)
     )]
-    HoldsResults { dir: PathBuf, found: String },
+    HoldsResults {
+        dir: PathBuf,
+        found: String,
+        /// The folder has a checkpoint, so `--restart` could continue that run.
+        restartable: bool,
+    },
 }
 
 /// A claimed output folder; the lock is held until it is dropped.
@@ -98,6 +105,7 @@ impl RunFolder {
                 return Err(FolderError::HoldsResults {
                     dir: dir.to_path_buf(),
                     found: describe(&files),
+                    restartable: files.iter().any(|f| f == CHECKPOINT_FILE),
                 })
             }
             Existing::Refuse => {}
@@ -122,6 +130,19 @@ impl RunFolder {
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+}
+
+/// The `--restart` choice, offered only where there is a checkpoint to continue from (a
+/// completed run has none).
+fn restart_phrase(dir: &Path, restartable: bool) -> String {
+    if restartable {
+        format!(
+            ", `--restart {}` to continue that run from its checkpoint",
+            dir.display()
+        )
+    } else {
+        String::new()
     }
 }
 
@@ -153,7 +174,7 @@ fn is_run_file(name: &str) -> bool {
         "solution.pvd",
         "scenario.toml",
         "steps.csv",
-        "checkpoint.bin",
+        CHECKPOINT_FILE,
     ];
     FIXED.contains(&name) || frame_step(name).is_some() || is_temporary(name)
 }
@@ -233,6 +254,11 @@ mod tests {
             e.contains("--overwrite") && e.contains("summary.json") && e.contains("3 frame files"),
             "{e}"
         );
+        // No checkpoint (a completed run): nothing to continue, so no `--restart`.
+        assert!(!e.contains("--restart"), "{e}");
+        fs::write(dir.join("checkpoint.bin"), "x").unwrap();
+        let e = RunFolder::claim(&dir, &Existing::Refuse).unwrap_err().to_string();
+        assert!(e.contains(&format!("`--restart {}`", dir.display())), "{e}");
         drop(RunFolder::claim(&dir, &Existing::Continue { frames: vec![16] }).unwrap());
         assert!(dir.join("solution_0016.vtu").exists() && !dir.join("solution_0032.vtu").exists());
         assert!(!dir.join("contact_0032.csv").exists() && dir.join("summary.json").exists());
