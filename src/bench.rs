@@ -156,13 +156,25 @@ pub fn hard_cases() -> Vec<HardCase> {
             "3d-56x14x14",
             "3D example on 56 × 14 × 14 cells (47k unknowns), k = 1/8, direct path",
             Some("scenarios/paper3d.toml"),
-            &["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8", "solver.linear=direct"],
+            &[
+                "mesh.nx=56",
+                "mesh.ny=14",
+                "mesh.nz=14",
+                "time.steps=8",
+                "solver.linear=direct",
+            ],
         ),
         case(
             "3d-iterative",
             "the same on the iterative path (Newton–Krylov; no descent: cutback instead)",
             Some("scenarios/paper3d.toml"),
-            &["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8", "solver.linear=iterative"],
+            &[
+                "mesh.nx=56",
+                "mesh.ny=14",
+                "mesh.nz=14",
+                "time.steps=8",
+                "solver.linear=iterative",
+            ],
         ),
     ]
 }

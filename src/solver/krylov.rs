@@ -162,13 +162,16 @@ impl CsrMatrix {
     /// y = A x, rows in parallel blocks: each row's sum is computed alone and in one order,
     /// so y is the same to the bit on any number of threads.
     pub fn mul(&self, x: &[f64], y: &mut [f64]) {
-        y[..self.n].par_chunks_mut(MUL_ROWS_PER_TASK).enumerate().for_each(|(block, ys)| {
-            let first = block * MUL_ROWS_PER_TASK;
-            for (i, y) in (first..).zip(ys.iter_mut()) {
-                let (s, e) = (self.ptr[i], self.ptr[i + 1]);
-                *y = sparse_dot(&self.col[s..e], &self.val[s..e], x);
-            }
-        });
+        y[..self.n]
+            .par_chunks_mut(MUL_ROWS_PER_TASK)
+            .enumerate()
+            .for_each(|(block, ys)| {
+                let first = block * MUL_ROWS_PER_TASK;
+                for (i, y) in (first..).zip(ys.iter_mut()) {
+                    let (s, e) = (self.ptr[i], self.ptr[i + 1]);
+                    *y = sparse_dot(&self.col[s..e], &self.val[s..e], x);
+                }
+            });
     }
 }
 
