@@ -5,7 +5,8 @@
 //!
 //! ```text
 //! claim the folder → factor or precondition (time::LinearSystem::new) → set the solver up → steps (time::march_from)
-//!   each step: steps.csv record, log line; output steps: frames, solution.pvd rewritten;
+//!   each step: steps.csv record, log line; output steps: frames, solution.pvd rewritten (and
+//!   steps.csv, at most every 10 s);
 //!   every `checkpoint_every` steps: checkpoint.bin, steps.csv, summary.json ("running")
 //! → summary.json ("completed", or "failed" / "interrupted" with the last state written)
 //! ```
@@ -357,6 +358,7 @@ pub fn run_observed(
     // times and at the end instead of the bar.
     let batch = options.progress && !terminal;
     let mut last_line = Instant::now();
+    let mut last_steps_write = Instant::now();
 
     let mut output_time = 0.0;
     // The initial state is a frame when an output time rounds to level 0 (a continued run has
@@ -425,6 +427,12 @@ pub fn run_observed(
             ));
             if let Some(files) = &files {
                 files.frame(state, &record, &mut tally)?;
+                // steps.csv grows with the run: rewritten at output times at most every 10 s
+                // (so that a long run with many frames does not rewrite it quadratically).
+                if last_steps_write.elapsed().as_secs_f64() >= 10.0 {
+                    files.steps(&tally)?;
+                    last_steps_write = Instant::now();
+                }
             }
             tally.outputs.push(record);
         }
