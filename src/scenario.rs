@@ -797,10 +797,10 @@ impl Scenario {
             (None, None) => return Ok(()),
         };
         let unknowns = (d + 1) as f64 * nodes;
-        let linear = self.solver.linear.resolve(d, unknowns as usize, self.solver.kind);
-        let needed = crate::resources::estimated_memory_on(d, unknowns, linear);
         // Without /proc/meminfo, a bound no machine passes.
         let available = crate::resources::machine_memory().unwrap_or(1e15);
+        let linear = (self.solver.linear).resolve(d, unknowns as usize, self.solver.kind, available);
+        let needed = crate::resources::estimated_memory_on(d, unknowns, linear);
         if needed > available {
             let direct = linear != LinearKind::Iterative;
             return Err(Error::TooLarge {

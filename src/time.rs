@@ -113,12 +113,12 @@ pub enum LinearSystem {
 impl LinearSystem {
     /// Assembles the step matrix of step size k and factors or preconditions it.
     pub fn new(problem: &Problem, k: f64, params: &SolverParams) -> Result<Self, Error> {
-        Ok(
-            match params.linear.resolve(problem.dim(), problem.n_unknowns(), params.kind) {
-                LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, k, params.krylov)?),
-                _ => LinearSystem::Direct(StepSystem::factored(problem, StepMatrix::assemble(problem, k))?),
-            },
-        )
+        let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
+        let linear = (params.linear).resolve(problem.dim(), problem.n_unknowns(), params.kind, memory);
+        Ok(match linear {
+            LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, k, params.krylov)?),
+            _ => LinearSystem::Direct(StepSystem::factored(problem, StepMatrix::assemble(problem, k))?),
+        })
     }
 }
 

@@ -121,16 +121,37 @@ fn krylov_iterations_stay_bounded_under_refinement() {
     );
 }
 
-/// `auto` is direct in 2D and for small 3D problems, iterative from 40 000 unknowns in 3D; the
-/// paper's solver needs the direct path.
+/// `auto` is direct where the direct factor fits in half the machine's memory (always in 2D),
+/// iterative beyond; the paper's solver needs the direct path.
 #[test]
-fn auto_picks_the_path_by_size_and_the_paper_solver_needs_direct() {
+fn auto_picks_the_path_by_memory_and_the_paper_solver_needs_direct() {
     use thermocontact::solver::{LinearKind, SolverKind};
     let auto = LinearKind::Auto;
-    assert_eq!(auto.resolve(2, 10_000_000, SolverKind::Fast), LinearKind::Direct);
-    assert_eq!(auto.resolve(3, 17_590, SolverKind::Fast), LinearKind::Direct);
-    assert_eq!(auto.resolve(3, 98_334, SolverKind::Fast), LinearKind::Iterative);
-    assert_eq!(auto.resolve(3, 98_334, SolverKind::Paper), LinearKind::Direct);
+    let gib = (1u64 << 30) as f64;
+    assert_eq!(
+        auto.resolve(2, 10_000_000, SolverKind::Fast, 24.0 * gib),
+        LinearKind::Direct
+    );
+    assert_eq!(
+        auto.resolve(3, 98_334, SolverKind::Fast, 24.0 * gib),
+        LinearKind::Direct
+    );
+    assert_eq!(
+        auto.resolve(3, 972_270, SolverKind::Fast, 24.0 * gib),
+        LinearKind::Iterative
+    );
+    assert_eq!(
+        auto.resolve(3, 98_334, SolverKind::Fast, 2.0 * gib),
+        LinearKind::Iterative
+    );
+    assert_eq!(
+        auto.resolve(3, 972_270, SolverKind::Paper, 24.0 * gib),
+        LinearKind::Direct
+    );
+    assert_eq!(
+        LinearKind::Direct.resolve(3, 972_270, SolverKind::Fast, 24.0 * gib),
+        LinearKind::Direct
+    );
     let error = Scenario::load(
         Some(PAPER3D),
         &["solver.kind=paper".into(), "solver.linear=iterative".into()],
