@@ -102,7 +102,7 @@ enum Command {
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
         /// Run the hard suite instead: long runs, a coarse k, steep slip weakening (α = 1000,
-        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 4 minutes, most of it the
+        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 1.5 minutes, most of it the
         /// 3D case). Prints for each case whether it completed, its cutbacks, the steps the
         /// descent finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
         /// case reads scenarios/paper3d.toml).
@@ -113,7 +113,7 @@ enum Command {
         /// unknowns), --steps-3d steps of k = 1/--inverse-k each, on the iterative path and, up
         /// to --direct-up-to, on the direct one; then nx = --coarse-k-cells again at k = 1/8 on
         /// both paths. Prints set-up, time per step, Newton and Krylov iterations per step and
-        /// peak memory with their growth exponents, and writes bench_3d.json (about 5 minutes).
+        /// peak memory with their growth exponents, and writes bench_3d.json (about 1.5 minutes).
         #[arg(long = "3d")]
         three_d: bool,
         /// Cells along x of the 3D suite.
