@@ -69,7 +69,7 @@ use super::newton::{max_diff, slip_linearization};
 use super::system::{norm2 as norm, State, SystemStats};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
-use crate::error::Error;
+use crate::error::{Error, FactorStage};
 use crate::problem::Problem;
 
 /// The rows of one contact node in the iterative path's ordering.
@@ -116,6 +116,12 @@ impl KrylovSystem {
     pub fn new(problem: &Problem, k: f64, params: KrylovParams) -> Result<Self, Error> {
         let n_w = problem.velocity.n_free;
         let n = n_w + problem.temperature.n_free;
+        if u32::try_from(n).is_err() {
+            return Err(Error::Factorization {
+                stage: FactorStage::IncompleteLu,
+                detail: format!("{n} unknowns exceed 32-bit indices"),
+            });
+        }
         let tangential: Vec<usize> = (problem.contact.iter())
             .flat_map(|node| node.tangent_dofs.iter().flatten().copied())
             .collect();
@@ -133,7 +139,7 @@ impl KrylovSystem {
         let mut j = 0;
         let rhs = assemble_by_columns(problem, k, &order, |column| {
             let sign = if order[j] < n_w { 1.0 } else { -1.0 };
-            col.extend(column.iter().map(|&(c, _)| c));
+            col.extend(column.iter().map(|&(c, _)| c as u32));
             val.extend(column.iter().map(|&(_, v)| sign * v));
             ptr.push(col.len());
             j += 1;
@@ -149,7 +155,7 @@ impl KrylovSystem {
             .collect();
         let diagonal = |row: usize| {
             let (cols, vals) = a.row(row);
-            cols.binary_search(&row).map_or(0.0, |p| vals[p])
+            cols.binary_search(&(row as u32)).map_or(0.0, |p| vals[p])
         };
         let nodes = (problem.contact.iter().enumerate())
             .map(|(i, node)| {
@@ -275,7 +281,7 @@ impl Linearization<'_> {
             let q_norm = norm(&q[..m]);
             if q_norm <= bound {
                 for &(_, row) in &node.tangent {
-                    let diagonal = a.row(row).0.binary_search(&row).expect("a diagonal entry");
+                    let diagonal = a.row(row).0.binary_search(&(row as u32)).expect("a diagonal entry");
                     for (p, v) in a.row_values_mut(row).iter_mut().enumerate() {
                         if p != diagonal {
                             *v = 0.0;
@@ -293,7 +299,7 @@ impl Linearization<'_> {
                         let p = a
                             .row(row)
                             .0
-                            .binary_search(&col)
+                            .binary_search(&(col as u32))
                             .expect("a node's tangent unknowns couple");
                         a.row_values_mut(row)[p] -= node.weight * b_i[j][l];
                     }
@@ -340,7 +346,7 @@ impl Linearization<'_> {
                     for &(k, row) in &node.tangent {
                         let cols = a.row(row).0;
                         let values = &sys.base[sys.base_start[row - sys.first_contact]..][..cols.len()];
-                        let ax: f64 = cols.iter().zip(values).map(|(&c, v)| v * x[c]).sum();
+                        let ax: f64 = cols.iter().zip(values).map(|(&c, v)| v * x[c as usize]).sum();
                         new_xi[start + k] = (ax - self.b[row]) / node.weight;
                     }
                 }
