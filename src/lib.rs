@@ -18,8 +18,12 @@
 //!
 //! P1 elements for the velocity w and the temperature θ, backward Euler in time with step k,
 //! u_n = u_{n−1} + k w_n. Each step is one linear system with a constant matrix
-//! ([`solver::system::StepSystem`], factored once) plus the nonsmooth laws on Γ_C, solved by the
-//! convexification loop with an augmented-Lagrangian inner solver ([`solver::paper`]).
+//! ([`solver::matrix::StepMatrix`]) plus the nonsmooth laws on Γ_C, solved by the
+//! convexification loop with an augmented-Lagrangian inner solver ([`solver::paper`]). Two linear
+//! paths carry it: the direct one factors the matrix once and condenses each step onto Γ_C
+//! ([`solver::system::StepSystem`], [`solver::fast`]); the iterative one solves each step on all
+//! unknowns by Newton iterations with GMRES + ILU(0) ([`solver::newton_krylov`]), memory linear
+//! in the unknowns (`solver.linear`).
 //!
 //! ## Glossary (paper symbol → identifier)
 //!
@@ -35,6 +39,8 @@
 //! | μ(r) S | `bound` | friction bound at slip rate r |
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
+//! | A, S = J A | `CsrMatrix` (A), `StepMatrix::matrix` (S) | the step matrix, and its symmetric quasi-definite form (temperature rows negated) |
+//! | J (Newton) | the linearized A in [`solver::newton_krylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of docs/model.md |
 //!
 //! ## Module map
@@ -42,7 +48,8 @@
 //! [`mesh`] → [`fem`] (simplices, kernels, assembly, constrained spaces) → [`material`],
 //! [`loads`] (data as constants, affine in t or expressions of x, y, z, t; P1 load vectors),
 //! [`contact`] (per-node frames, laws) → [`problem`] (built by [`problem::ProblemBuilder`] from
-//! typed parts: the discrete problem) → [`solver`] (step system and nonsmooth solvers) →
+//! typed parts: the discrete problem) → [`solver`] (step matrix, the direct and iterative linear
+//! paths, nonsmooth solvers) →
 //! [`time`] (the one time loop, with cutback levels k/2, k/4, … where a step fails) →
 //! [`driver`] (a run: its folder, output, checkpoints and restart, progress and batch logs,
 //! stopping on signals, timings, a stopped run's record) → [`output`] (files: VTK, CSV,
