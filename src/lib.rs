@@ -40,7 +40,7 @@
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
 //! | A, S = J A | `CsrMatrix` (A), `StepMatrix::matrix` (S) | the step matrix, and its symmetric quasi-definite form (temperature rows negated) |
-//! | J (Newton) | the linearized A in [`solver::newton_krylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
+//! | Ã | the Newton matrix of [`solver::newton_krylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of docs/model.md |
 //!
 //! ## Module map

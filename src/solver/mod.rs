@@ -201,7 +201,7 @@ pub enum Criterion {
     NodalLaw,
     /// A linear solve of the Newton method gave a non-finite update.
     NonFiniteUpdate,
-    /// ‖b − J x‖ / ‖b‖ of a Krylov solve at its iteration cap.
+    /// ‖b̃ − Ã x‖ / ‖b̃‖ of a Krylov solve at its iteration cap.
     LinearResidual,
 }
 

@@ -21,7 +21,7 @@
 //! At a Newton iterate the nodes split as in [`super::newton`]: stick where |ξ_i − r_i w_i| ≤ g_i
 //! (linearized: w_i = 0, and ξ_i is what the node's rows of A x − b leave over), slip otherwise
 //! (linearized: ξ_i = a_i + B_i w_i, substituted into the node's rows as the block −ℓ_i B_i). So
-//! each Newton iteration solves one sparse system J x = b̃ whose matrix is A with the tangential
+//! each Newton iteration solves one sparse system Ã x = b̃ whose matrix is A with the tangential
 //! rows of the contact nodes changed, node by node, inside A's pattern. The linear equations
 //! then hold at the new iterate, so the convex problem is solved once its law holds there (to
 //! 1 % of the loop's last change, as the fast solver's inner solves): usually after one Newton
@@ -44,9 +44,9 @@
 //!   between stick and slip: it is not smooth).
 //!
 //! **The linear solves.** The tangential velocity unknowns of Γ_C are ordered last, so that the
-//! rows a linearization changes are the last rows of J: their ILU(0) rows are refactored in
-//! O(n_t) per iteration ([`Ilu0::refactor_from`]) and the preconditioner is the ILU(0) of J
-//! itself, not of A (a stick row, w_i = 0, is far from A's row; preconditioning J with A's
+//! rows a linearization changes are the last rows of Ã: their ILU(0) rows are refactored in
+//! O(n_t) per iteration ([`Ilu0::refactor_from`]) and the preconditioner is the ILU(0) of Ã
+//! itself, not of A (a stick row, w_i = 0, is far from A's row; preconditioning Ã with A's
 //! factor would leave GMRES a rank-n_t perturbation to find). GMRES starts from the previous
 //! iterate (from the previous step's state at the first), so the later iterations of a step
 //! need few Krylov iterations. Why GMRES + ILU(0) and when it stays bounded:
@@ -103,7 +103,7 @@ pub struct KrylovSystem {
     base: Vec<f64>,
     /// Where row `first_contact + j` starts in `base`.
     base_start: Vec<usize>,
-    /// J and its ILU(0), changed in the contact rows by each linearization.
+    /// Ã and its ILU(0), changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, Ilu0)>,
     params: KrylovParams,
     stats: Mutex<SystemStats>,
@@ -227,7 +227,7 @@ enum Linearized {
 /// (the next iterate starts from where this one stopped).
 const MAX_NEWTON_PER_CONVEX_PROBLEM: usize = 20;
 
-/// One step's linear algebra: J (A with its contact rows linearized), its ILU(0) and b̃.
+/// One step's linear algebra: Ã (A with its contact rows linearized), its ILU(0) and b̃.
 struct Linearization<'s> {
     system: &'s KrylovSystem,
     a: &'s mut CsrMatrix,
@@ -244,7 +244,7 @@ struct Linearization<'s> {
 
 impl Linearization<'_> {
     /// One Newton iteration of the convex problem with the bounds `frozen`, from (w, ξ) (x the
-    /// unknowns they come from, updated in place): linearize, solve J x = b̃ by GMRES from x,
+    /// unknowns they come from, updated in place): linearize, solve Ã x = b̃ by GMRES from x,
     /// and return the new (w, ξ).
     fn newton_iteration(
         &mut self,
