@@ -335,8 +335,37 @@ impl Ilu0 {
     }
 }
 
+/// Entries per block of the vector operations: the blocks' partial sums are computed in
+/// parallel and added in block order, so a dot product is the same to the bit on any number of
+/// threads.
+const VECTOR_BLOCK: usize = 16_384;
+
+/// a · b, by blocks ([`VECTOR_BLOCK`]).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let block = |(x, y): (&[f64], &[f64])| {
+        let mut acc = [0.0; 4];
+        let (x4, y4) = (x.chunks_exact(4), y.chunks_exact(4));
+        let tail: f64 = x4.remainder().iter().zip(y4.remainder()).map(|(p, q)| p * q).sum();
+        for (p, q) in x4.zip(y4) {
+            for k in 0..4 {
+                acc[k] += p[k] * q[k];
+            }
+        }
+        (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+    };
+    let partials: Vec<f64> = a
+        .par_chunks(VECTOR_BLOCK)
+        .zip(b.par_chunks(VECTOR_BLOCK))
+        .map(block)
+        .collect();
+    partials.iter().sum()
+}
+
+/// y += alpha x, by blocks in parallel.
+fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
+    y.par_chunks_mut(VECTOR_BLOCK)
+        .zip(x.par_chunks(VECTOR_BLOCK))
+        .for_each(|(y, x)| y.iter_mut().zip(x).for_each(|(y, x)| *y += alpha * x));
 }
 
 fn norm(a: &[f64]) -> f64 {
@@ -348,24 +377,42 @@ fn norm(a: &[f64]) -> f64 {
 ///
 /// Fails with [`Error::KrylovNotConverged`] (with the residual history) at the iteration cap.
 pub fn gmres(a: &CsrMatrix, pc: &Ilu0, b: &[f64], x: &mut [f64], params: &KrylovParams) -> Result<SolveInfo, Error> {
+    let mut r = Vec::new();
+    gmres_from_residual(a, pc, b, x, &mut r, params)
+}
+
+/// [`gmres`] with the residual r = b − A x of the initial guess given (when `r` has A's size;
+/// otherwise it is computed), and left in `r` for the solution it returns: a caller whose next
+/// system differs from this one in a few rows updates those rows of r instead of a product
+/// with A ([`super::newton_krylov`]).
+pub fn gmres_from_residual(
+    a: &CsrMatrix,
+    pc: &Ilu0,
+    b: &[f64],
+    x: &mut [f64],
+    r: &mut Vec<f64>,
+    params: &KrylovParams,
+) -> Result<SolveInfo, Error> {
     let n = a.n;
     let m = params.restart.max(1);
+    let mut w = vec![0.0; n];
+    if r.len() != n {
+        a.mul(x, &mut w);
+        r.clear();
+        r.extend(b.iter().zip(&w).map(|(b, ax)| b - ax));
+    }
     let bnorm = norm(b);
     if bnorm == 0.0 {
         x.fill(0.0);
+        r.fill(0.0);
         return Ok(SolveInfo::default());
     }
     let target = params.rtol * bnorm;
-    let mut r = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    let mut z = vec![0.0; n];
-    a.mul(x, &mut w);
-    r.iter_mut().zip(b.iter().zip(&w)).for_each(|(r, (b, ax))| *r = b - ax);
     let mut v: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
-    let mut history = vec![norm(&r) / bnorm];
+    let mut history = vec![norm(r) / bnorm];
     let mut it = 0;
     loop {
-        let beta = norm(&r);
+        let beta = norm(r);
         if !beta.is_finite() {
             return Err(Error::NonFiniteSolution {
                 non_finite: r.iter().filter(|v| !v.is_finite()).count(),
@@ -389,18 +436,23 @@ pub fn gmres(a: &CsrMatrix, pc: &Ilu0, b: &[f64], x: &mut [f64], params: &Krylov
         }
         v.clear();
         v.push(r.iter().map(|r| r / beta).collect());
+        // The preconditioned directions M⁻¹ v_j, kept for the update: x += Σ y_j M⁻¹ v_j costs
+        // no further sweep of the factor (the sweeps are the sequential part of an iteration).
+        let mut zs: Vec<Vec<f64>> = Vec::new();
         let mut h = vec![vec![0.0; m]; m + 1];
         let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
         let mut g = vec![0.0; m + 1];
         g[0] = beta;
         let mut used = 0;
         for j in 0..m {
+            let mut z = vec![0.0; n];
             pc.apply(&v[j], &mut z);
             a.mul(&z, &mut w);
+            zs.push(z);
             for (i, vi) in v.iter().enumerate() {
                 let hij = dot(&w, vi);
                 h[i][j] = hij;
-                w.iter_mut().zip(vi).for_each(|(w, v)| *w -= hij * v);
+                axpy(-hij, vi, &mut w);
             }
             let hn = norm(&w);
             h[j + 1][j] = hn;
@@ -424,18 +476,15 @@ pub fn gmres(a: &CsrMatrix, pc: &Ilu0, b: &[f64], x: &mut [f64], params: &Krylov
                 break;
             }
         }
-        // x += M⁻¹ V y with H y = g.
+        // x += M⁻¹ V y = Σ y_j (M⁻¹ v_j) with H y = g.
         let mut y = vec![0.0; used];
         for i in (0..used).rev() {
             let s: f64 = g[i] - (i + 1..used).map(|k| h[i][k] * y[k]).sum::<f64>();
             y[i] = s / h[i][i];
         }
-        w.fill(0.0);
-        for (vi, yi) in v.iter().zip(&y) {
-            w.iter_mut().zip(vi).for_each(|(w, v)| *w += yi * v);
+        for (zj, yj) in zs.iter().zip(&y) {
+            axpy(*yj, zj, x);
         }
-        pc.apply(&w, &mut z);
-        x.iter_mut().zip(&z).for_each(|(x, z)| *x += z);
         a.mul(x, &mut w);
         r.iter_mut().zip(b.iter().zip(&w)).for_each(|(r, (b, ax))| *r = b - ax);
     }

@@ -63,7 +63,7 @@
 use std::sync::Mutex;
 use std::time::Instant;
 
-use super::krylov::{gmres, CsrMatrix, Ilu0, KrylovParams};
+use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0, KrylovParams};
 use super::matrix::{assemble_by_columns, StepRhs};
 use super::newton::{max_diff, slip_linearization};
 use super::system::{norm2 as norm, State, SystemStats};
@@ -239,6 +239,8 @@ struct Linearization<'s> {
     /// d − 1.
     td: usize,
     rhs: Vec<f64>,
+    /// b̃ − Ã x after the last solve (empty before the step's first).
+    residual: Vec<f64>,
     nodes: Vec<Linearized>,
 }
 
@@ -309,7 +311,18 @@ impl Linearization<'_> {
         }
         let clock = Instant::now();
         self.ilu.refactor_from(a, sys.first_contact)?;
-        let solved = gmres(a, self.ilu, rhs, x, &sys.params);
+        // The previous solve left r = b̃ − Ã x for this x; only the Γ_C rows and the contact
+        // nodes' temperature rows of Ã and b̃ changed since, so only they are recomputed (a
+        // product with Ã saved per iteration).
+        if self.residual.len() == n {
+            let theta_rows = sys.nodes.iter().filter_map(|node| node.theta);
+            for row in (sys.first_contact..n).chain(theta_rows) {
+                let (cols, vals) = a.row(row);
+                let ax: f64 = cols.iter().zip(vals).map(|(&c, v)| v * x[c as usize]).sum();
+                self.residual[row] = rhs[row] - ax;
+            }
+        }
+        let solved = gmres_from_residual(a, self.ilu, rhs, x, &mut self.residual, &sys.params);
         sys.count(|s| {
             s.solves += 1;
             s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);
@@ -437,6 +450,7 @@ impl<'a> NewtonKrylov<'a> {
             heat_rate: problem.heating.heat(t, 1.0),
             td,
             rhs: vec![0.0; n],
+            residual: Vec::new(),
             nodes: Vec::with_capacity(sys.nodes.len()),
         };
         // The convex problems are solved to 1 % of the loop's last change (they only need to
