@@ -78,7 +78,7 @@ impl LinearKind {
     /// of the direct path ([`crate::resources::estimated_memory`]) is at most half the machine's
     /// memory, and iterative beyond (the 3D factor's fill grows like N^{4/3}). Where both fit
     /// the direct path is the faster one over a whole run (measured on the 3D example, 64 steps:
-    /// 47k unknowns 10 s against 23 s, 98k 39 s against 62 s: the iterative path pays a Krylov
+    /// 47k unknowns 10 s against 18 s, 98k 39 s against 45 s: the iterative path pays a Krylov
     /// solve per convexification iterate, the direct one a dense product on Γ_C). The paper's
     /// solver needs the direct path (the condensation).
     pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
