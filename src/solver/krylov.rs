@@ -156,6 +156,27 @@ impl CsrMatrix {
         &mut self.val[self.ptr[i]..self.ptr[i + 1]]
     }
 
+    /// The values of rows `first..n`, one after the other (the rows are stored in order).
+    pub fn values_from(&self, first: usize) -> &[f64] {
+        &self.val[self.ptr[first]..]
+    }
+
+    /// The same, to change in place.
+    pub fn values_from_mut(&mut self, first: usize) -> &mut [f64] {
+        &mut self.val[self.ptr[first]..]
+    }
+
+    /// Σ_c v_c x_c over row i's pattern with the values `values` (row i's own, or another
+    /// matrix's on the same pattern).
+    pub fn row_dot(&self, i: usize, values: &[f64], x: &[f64]) -> f64 {
+        sparse_dot32(&self.col[self.ptr[i]..self.ptr[i + 1]], values, x)
+    }
+
+    /// Where row i starts among rows `first..n` ([`Self::values_from`]).
+    pub fn offset_from(&self, first: usize, i: usize) -> std::ops::Range<usize> {
+        self.ptr[i] - self.ptr[first]..self.ptr[i + 1] - self.ptr[first]
+    }
+
     /// Stored entries.
     pub fn nnz(&self) -> usize {
         self.val.len()

@@ -243,7 +243,6 @@ impl CondensedStep<'_> {
 
     /// max |E2| (stress units) at (w, ξ): the nodal law alone, O(n_t).
     pub fn law_residual(&self, w: &[f64], xi: &[f64], frozen: Option<&[f64]>) -> f64 {
-        let t = self.tangential;
         let mut e2: f64 = 0.0;
         for i in 0..self.nodes() {
             let range = self.range(i);
@@ -251,17 +250,26 @@ impl CondensedStep<'_> {
                 Some(g) => g[i],
                 None => self.friction.bound(norm(&w[range.clone()])),
             };
-            let mut q = [0.0; 2];
-            for (k, j) in range.clone().enumerate() {
-                q[k] = xi[j] - self.augmentation * w[j];
-            }
-            crate::contact::project_to_ball(&mut q[..t], bound);
-            for (k, j) in range.enumerate() {
-                e2 = e2.max((xi[j] - q[k]).abs());
-            }
+            e2 = e2.max(node_law_residual(
+                &w[range.clone()],
+                &xi[range],
+                bound,
+                self.augmentation,
+            ));
         }
         e2
     }
+}
+
+/// max_k |ξ_k − P_g(ξ − r w)_k| at one node: the Alart–Curnier residual of the law with bound
+/// g (stress units).
+pub(super) fn node_law_residual(w: &[f64], xi: &[f64], bound: f64, r: f64) -> f64 {
+    let mut q = [0.0; 2];
+    for k in 0..w.len() {
+        q[k] = xi[k] - r * w[k];
+    }
+    crate::contact::project_to_ball(&mut q[..w.len()], bound);
+    (0..w.len()).fold(0.0, |worst, k| worst.max((xi[k] - q[k]).abs()))
 }
 
 /// At a slip node (|q| > b(|w|)), linearizes F = ξ − b(|w|) q/|q| = 0 around (w, ξ) and solves it

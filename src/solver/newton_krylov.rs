@@ -65,18 +65,15 @@ use std::time::Instant;
 
 use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0, KrylovParams};
 use super::matrix::{assemble_by_columns, StepRhs};
-use super::newton::{max_diff, slip_linearization};
-use super::system::{norm2 as norm, State, SystemStats};
+use super::newton::{max_diff, node_law_residual, slip_linearization};
+use super::system::{contact_tangential_unknowns, norm2 as norm, State, SystemStats};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
-use crate::contact::project_to_ball;
 use crate::error::{Error, FactorStage};
 use crate::problem::Problem;
 
 /// The rows of one contact node in the iterative path's ordering.
 #[derive(Debug, Clone)]
 struct NodeRows {
-    /// Index into `problem.contact`.
-    node: usize,
     /// (tangent coordinate k, row of its velocity unknown) for the coordinates that are not
     /// held; the held ones keep w = ξ = 0.
     tangent: Vec<(usize, usize)>,
@@ -99,10 +96,9 @@ pub struct KrylovSystem {
     /// The first row of the Γ_C tangential velocities.
     first_contact: usize,
     nodes: Vec<NodeRows>,
-    /// The contact rows' values of A, rows `first_contact..n` one after the other.
+    /// The contact rows' values of A, rows `first_contact..n` one after the other
+    /// ([`CsrMatrix::values_from`]).
     base: Vec<f64>,
-    /// Where row `first_contact + j` starts in `base`.
-    base_start: Vec<usize>,
     /// Ã and its ILU(0), changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, Ilu0)>,
     params: KrylovParams,
@@ -122,9 +118,7 @@ impl KrylovSystem {
                 detail: format!("{n} unknowns exceed 32-bit indices"),
             });
         }
-        let tangential: Vec<usize> = (problem.contact.iter())
-            .flat_map(|node| node.tangent_dofs.iter().flatten().copied())
-            .collect();
+        let tangential: Vec<usize> = contact_tangential_unknowns(problem).collect();
         let mut is_contact = vec![false; n];
         tangential.iter().for_each(|&r| is_contact[r] = true);
         let order: Vec<usize> = (0..n).filter(|&r| !is_contact[r]).chain(tangential).collect();
@@ -145,27 +139,19 @@ impl KrylovSystem {
             j += 1;
         });
         let a = CsrMatrix::from_rows(n, ptr, col, val);
-        let base: Vec<f64> = (first_contact..n).flat_map(|i| a.row(i).1.to_vec()).collect();
-        let base_start: Vec<usize> = (first_contact..n)
-            .scan(0, |start, i| {
-                let this = *start;
-                *start += a.row(i).0.len();
-                Some(this)
-            })
-            .collect();
+        let base = a.values_from(first_contact).to_vec();
         let diagonal = |row: usize| {
             let (cols, vals) = a.row(row);
             cols.binary_search(&(row as u32)).map_or(0.0, |p| vals[p])
         };
-        let nodes = (problem.contact.iter().enumerate())
-            .map(|(i, node)| {
+        let nodes = (problem.contact.iter())
+            .map(|node| {
                 let tangent: Vec<(usize, usize)> = (node.tangent_dofs.iter().enumerate())
                     .filter_map(|(k, dof)| dof.map(|r| (k, position[r])))
                     .collect();
                 let stiffness =
                     tangent.iter().map(|&(_, row)| diagonal(row)).sum::<f64>() / tangent.len().max(1) as f64;
                 NodeRows {
-                    node: i,
                     tangent,
                     theta: node.theta_dof.map(|r| position[n_w + r]),
                     weight: node.weight,
@@ -184,7 +170,6 @@ impl KrylovSystem {
             first_contact,
             nodes,
             base,
-            base_start,
             work: Mutex::new((a, ilu)),
             params,
             stats: Mutex::new(SystemStats::default()),
@@ -261,14 +246,10 @@ impl Linearization<'_> {
         let a = &mut *self.a;
         let rhs = &mut self.rhs;
         rhs.copy_from_slice(self.b);
-        for (row, &start) in (sys.first_contact..n).zip(&sys.base_start) {
-            let values = a.row_values_mut(row);
-            let len = values.len();
-            values.copy_from_slice(&sys.base[start..start + len]);
-        }
+        a.values_from_mut(sys.first_contact).copy_from_slice(&sys.base);
         self.nodes.clear();
-        for node in &sys.nodes {
-            let range = node.node * td..(node.node + 1) * td;
+        for (i, node) in sys.nodes.iter().enumerate() {
+            let range = i * td..(i + 1) * td;
             if let Some(row) = node.theta {
                 rhs[row] += node.weight * self.heat_rate * norm(&w[range.clone()]);
             }
@@ -279,7 +260,7 @@ impl Linearization<'_> {
                 xii[j] = xi[range.start + k];
                 q[j] = xii[j] - node.augmentation * wi[j];
             }
-            let bound = frozen[node.node];
+            let bound = frozen[i];
             let q_norm = norm(&q[..m]);
             if q_norm <= bound {
                 for &(_, row) in &node.tangent {
@@ -317,9 +298,7 @@ impl Linearization<'_> {
         if self.residual.len() == n {
             let theta_rows = sys.nodes.iter().filter_map(|node| node.theta);
             for row in (sys.first_contact..n).chain(theta_rows) {
-                let (cols, vals) = a.row(row);
-                let ax: f64 = cols.iter().zip(vals).map(|(&c, v)| v * x[c as usize]).sum();
-                self.residual[row] = rhs[row] - ax;
+                self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
             }
         }
         let solved = gmres_from_residual(a, self.ilu, rhs, x, &mut self.residual, &sys.params);
@@ -352,15 +331,14 @@ impl Linearization<'_> {
         // The new iterate: w from x, ξ from the linearization (slip) or the rows (stick).
         let new_w = tangential(&sys.nodes, td, x, w.len());
         let mut new_xi = vec![0.0; xi.len()];
-        for (node, lin) in sys.nodes.iter().zip(&self.nodes) {
-            let start = node.node * td;
+        for (i, (node, lin)) in sys.nodes.iter().zip(&self.nodes).enumerate() {
+            let start = i * td;
             match lin {
                 Linearized::Stick => {
+                    // The node's rows of A (not Ã) leave ℓ_i ξ_i over.
                     for &(k, row) in &node.tangent {
-                        let cols = a.row(row).0;
-                        let values = &sys.base[sys.base_start[row - sys.first_contact]..][..cols.len()];
-                        let ax: f64 = cols.iter().zip(values).map(|(&c, v)| v * x[c as usize]).sum();
-                        new_xi[start + k] = (ax - self.b[row]) / node.weight;
+                        let values = &sys.base[a.offset_from(sys.first_contact, row)];
+                        new_xi[start + k] = (a.row_dot(row, values, x) - self.b[row]) / node.weight;
                     }
                 }
                 Linearized::Slip(a_i, b_i) => {
@@ -381,9 +359,9 @@ impl Linearization<'_> {
 /// system's order (0 at held coordinates).
 fn tangential(nodes: &[NodeRows], td: usize, x: &[f64], len: usize) -> Vec<f64> {
     let mut w = vec![0.0; len];
-    for node in nodes {
+    for (i, node) in nodes.iter().enumerate() {
         for &(k, row) in &node.tangent {
-            w[node.node * td + k] = x[row];
+            w[i * td + k] = x[row];
         }
     }
     w
@@ -515,22 +493,19 @@ impl<'a> NewtonKrylov<'a> {
         tangential(&self.system.nodes, td, x, self.problem.contact.len() * td)
     }
 
-    /// max_i |ξ_i − P_{b(|w_i|)}(ξ_i − r_i w_i)| (stress units): the nonmonotone law itself.
+    /// max_i |ξ_i − P_{g_i}(ξ_i − r_i w_i)| (stress units) for the bounds g: with g = b(|w|) the
+    /// nonmonotone law itself.
     fn law_residual(&self, w: &[f64], xi: &[f64], bounds: &[f64]) -> f64 {
         let td = self.problem.dim() - 1;
-        let mut worst: f64 = 0.0;
-        for node in &self.system.nodes {
-            let range = node.node * td..(node.node + 1) * td;
-            let mut q = [0.0; 2];
-            for (k, j) in range.clone().enumerate() {
-                q[k] = xi[j] - node.augmentation * w[j];
-            }
-            project_to_ball(&mut q[..td], bounds[node.node]);
-            for (k, j) in range.enumerate() {
-                worst = worst.max((xi[j] - q[k]).abs());
-            }
-        }
-        worst
+        (self.system.nodes.iter().enumerate()).fold(0.0, |worst, (i, node)| {
+            let range = i * td..(i + 1) * td;
+            worst.max(node_law_residual(
+                &w[range.clone()],
+                &xi[range],
+                bounds[i],
+                node.augmentation,
+            ))
+        })
     }
 }
 

@@ -407,13 +407,15 @@ pub fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
+/// The tangential velocity unknowns of the Γ_C nodes, node by node (held coordinates have none).
+pub(super) fn contact_tangential_unknowns(problem: &Problem) -> impl Iterator<Item = usize> + '_ {
+    (problem.contact.iter()).flat_map(|node| node.tangent_dofs.iter().flatten().copied())
+}
+
 /// The unknowns that contact terms touch, ordered last in the factorization: the tangential
 /// velocity unknowns of the Γ_C nodes, then their temperature unknowns.
 fn contact_unknowns(problem: &Problem, n_w: usize) -> Vec<usize> {
-    let tangential = problem
-        .contact
-        .iter()
-        .flat_map(|node| node.tangent_dofs.iter().flatten().copied());
+    let tangential = contact_tangential_unknowns(problem);
     let temperature = problem
         .contact
         .iter()
