@@ -58,21 +58,8 @@ pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
 /// its longest edge³; for cells of sides h, h, H that is H/h beyond about 4·10⁵) that they count
 /// as degenerate.
 pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshError> {
-    if cells.contains(&0) {
-        return Err(MeshError::Invalid(format!(
-            "a box of {} × {} × {} cells: it needs at least one cell per direction",
-            cells[0], cells[1], cells[2]
-        )));
-    }
+    let nodes = super::structured::grid_nodes("box", &cells, 24)?;
     let [n1, n2, n3] = cells;
-    let counted = cells
-        .iter()
-        .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
-    let Some(nodes) = counted.filter(|n| n.checked_mul(24).is_some()) else {
-        return Err(MeshError::Invalid(format!(
-            "a box of {n1} × {n2} × {n3} cells: too many to count"
-        )));
-    };
     let node = |ijk: [usize; 3]| ijk[0] + (n1 + 1) * (ijk[1] + (n2 + 1) * ijk[2]);
     let mut coords = Vec::with_capacity(nodes);
     for k in 0..=n3 {

@@ -2,6 +2,24 @@
 
 use super::{Mesh, MeshError};
 
+/// The nodes of a structured grid of `cells` cells per direction, checked: at least one cell
+/// per direction, and the nodes times `per_node` (a bound on the entries the generator stores
+/// per node) countable in a `usize`. `what` names the grid in the error.
+pub(super) fn grid_nodes(what: &str, cells: &[usize], per_node: usize) -> Result<usize, MeshError> {
+    let shape = cells.iter().map(usize::to_string).collect::<Vec<_>>().join(" × ");
+    if cells.contains(&0) {
+        return Err(MeshError::Invalid(format!(
+            "a {what} of {shape} cells: it needs at least one cell per direction"
+        )));
+    }
+    let counted = cells
+        .iter()
+        .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
+    counted
+        .filter(|n| n.checked_mul(per_node).is_some())
+        .ok_or_else(|| MeshError::Invalid(format!("a {what} of {shape} cells: too many to count")))
+}
+
 /// Boundary part names of [`rectangle`], in part-index order.
 pub fn rectangle_part_names() -> [&'static str; 4] {
     ["left", "right", "bottom", "top"]
@@ -29,19 +47,7 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
 /// non-finite or non-positive length, or cells so elongated (a cell's area ≤ 1e-12 × its
 /// longest edge², an aspect ratio beyond about 5·10¹¹) that they count as degenerate.
 pub fn try_rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<Mesh, MeshError> {
-    if nx == 0 || ny == 0 {
-        return Err(MeshError::Invalid(format!(
-            "a rectangle of {nx} × {ny} cells: it needs at least one cell per direction"
-        )));
-    }
-    let counted = [nx, ny]
-        .iter()
-        .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
-    let Some(nodes) = counted.filter(|n| n.checked_mul(6).is_some()) else {
-        return Err(MeshError::Invalid(format!(
-            "a rectangle of {nx} × {ny} cells: too many to count"
-        )));
-    };
+    let nodes = grid_nodes("rectangle", &[nx, ny], 6)?;
     let node = |i: usize, j: usize| i + j * (nx + 1);
     let mut coords = Vec::with_capacity(nodes);
     for j in 0..=ny {
