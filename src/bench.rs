@@ -43,12 +43,14 @@ pub struct BenchRow {
     pub peak_memory_mib: Option<f64>,
 }
 
-/// Runs `thermocontact run` on one configuration in a child process and reads its summary.
+/// Runs `thermocontact run` on one configuration in a child process and reads its summary. The
+/// run's folder belongs to the bench: a configuration measured again (the reference run is
+/// also a row of the scaling table, and a bench may be repeated) replaces its earlier run.
 pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -> anyhow::Result<BenchRow> {
     let ny = (nx / 4).max(1);
     let dir = work.join(format!("{solver}-{nx}x{ny}-{steps}"));
     let status = Command::new(exe)
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--quiet", "--overwrite", "--out"])
         .arg(&dir)
         .args(["--set", &format!("mesh.nx={nx}"), "--set", &format!("mesh.ny={ny}")])
         .args([
@@ -220,7 +222,7 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
         failure: None,
     };
     let mut command = Command::new(exe);
-    command.args(["run", "--quiet", "--out"]).arg(&dir);
+    command.args(["run", "--quiet", "--overwrite", "--out"]).arg(&dir);
     if let Some(file) = case.scenario {
         if !Path::new(file).exists() {
             row.failure = Some(format!("{file} not found (run from the repository root)"));
