@@ -85,6 +85,12 @@ impl VelocitySpace {
         self.first[node] + k
     }
 
+    /// The unknowns of node p (consecutive; empty at a held node).
+    pub fn node_unknowns(&self, node: usize) -> std::ops::Range<usize> {
+        let end = self.first.get(node + 1).copied().unwrap_or(self.n_free);
+        self.first[node]..end
+    }
+
     /// Number of full dofs d·N.
     pub fn n_full(&self) -> usize {
         self.ptr.len() - 1

@@ -5,6 +5,7 @@
 //! [`fast::FastSolver`] a semismooth Newton method on the same condensed problem, globalized by
 //! the descent of [`descent`] where Newton and the convexification loop both fail.
 
+pub mod bisection;
 pub mod condensed;
 pub mod descent;
 pub mod factor;

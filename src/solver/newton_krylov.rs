@@ -47,7 +47,9 @@
 //! rows a linearization changes are the last rows of Ã: their ILU(0) rows are refactored in
 //! O(n_t) per iteration ([`Ilu0::refactor_from`]) and the preconditioner is the ILU(0) of Ã
 //! itself, not of A (a stick row, w_i = 0, is far from A's row; preconditioning Ã with A's
-//! factor would leave GMRES a rank-n_t perturbation to find). GMRES starts from the previous
+//! factor would leave GMRES a rank-n_t perturbation to find). Before them come the two halves
+//! of the mesh and the cross-section between them ([`super::bisection`]), so that the ILU(0)
+//! sweeps run the halves on the two cores. GMRES starts from the previous
 //! iterate (from the previous step's state at the first), so the later iterations of a step
 //! need few Krylov iterations. Why GMRES + ILU(0) and when it stays bounded:
 //! docs/krylov-study.md.
@@ -63,12 +65,14 @@
 use std::sync::Mutex;
 use std::time::Instant;
 
+use super::bisection::{level_bisection, Part};
 use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0, KrylovParams};
 use super::matrix::{assemble_by_columns, StepRhs};
 use super::newton::{max_diff, node_law_residual, slip_linearization};
 use super::system::{contact_tangential_unknowns, norm2 as norm, State, SystemStats};
 use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 use crate::error::{Error, FactorStage};
+use crate::fem::sparse::NodeGraph;
 use crate::problem::Problem;
 
 /// The rows of one contact node in the iterative path's ordering.
@@ -105,6 +109,42 @@ pub struct KrylovSystem {
     stats: Mutex<SystemStats>,
 }
 
+/// The unknowns in the order of the ILU(0) sweeps, where the two domains end, and the first
+/// row of the Γ_C tangential velocities: the two parts of the mesh's [`level_bisection`] (each
+/// with its velocities, then its temperatures, in their own numbering), the separator's
+/// unknowns, then the Γ_C tangential velocities, last so that a linearization changes only the
+/// last rows. The parts share no entry of A, so [`Ilu0::with_domains`] sweeps them on two
+/// threads.
+fn sweep_order(problem: &Problem) -> (Vec<usize>, [usize; 2], usize) {
+    let n_w = problem.velocity.n_free;
+    let n = n_w + problem.temperature.n_free;
+    let tangential: Vec<usize> = contact_tangential_unknowns(problem).collect();
+    let mut is_contact = vec![false; n];
+    tangential.iter().for_each(|&r| is_contact[r] = true);
+    let mesh = &problem.mesh;
+    let mut node_of = vec![0; n];
+    let mut weight = vec![0; mesh.n_nodes()];
+    for (p, w) in weight.iter_mut().enumerate() {
+        let theta = problem.temperature.free[p].map(|r| n_w + r);
+        for r in problem.velocity.node_unknowns(p).chain(theta) {
+            node_of[r] = p;
+            *w += usize::from(!is_contact[r]);
+        }
+    }
+    let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
+    let part = level_bisection(&graph, &weight);
+    let (is_contact, part, node_of) = (&is_contact, &part, &node_of);
+    let in_part = |x: Part| (0..n).filter(move |&r| !is_contact[r] && part[node_of[r]] == x);
+    let first = in_part(Part::First).count();
+    let second = first + in_part(Part::Second).count();
+    let first_contact = n - tangential.len();
+    let order = (in_part(Part::First).chain(in_part(Part::Second)))
+        .chain(in_part(Part::Separator))
+        .chain(tangential)
+        .collect();
+    (order, [first, second], first_contact)
+}
+
 impl KrylovSystem {
     /// Assembles the step matrix of step size k in the order with the Γ_C tangential
     /// velocities last, as A's rows (no symmetric form, no triplets: [`assemble_by_columns`]),
@@ -118,13 +158,9 @@ impl KrylovSystem {
                 detail: format!("{n} unknowns exceed 32-bit indices"),
             });
         }
-        let tangential: Vec<usize> = contact_tangential_unknowns(problem).collect();
-        let mut is_contact = vec![false; n];
-        tangential.iter().for_each(|&r| is_contact[r] = true);
-        let order: Vec<usize> = (0..n).filter(|&r| !is_contact[r]).chain(tangential).collect();
+        let (order, parts, first_contact) = sweep_order(problem);
         let mut position = vec![0; n];
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
-        let first_contact = n - is_contact.iter().filter(|&&c| c).count();
 
         // Row j of P A Pᵀ is column j of P S Pᵀ, negated for a temperature unknown.
         let mut ptr = Vec::with_capacity(n + 1);
@@ -163,7 +199,7 @@ impl KrylovSystem {
                 }
             })
             .collect();
-        let ilu = Ilu0::new(&a)?;
+        let ilu = Ilu0::with_domains(&a, parts)?;
         Ok(KrylovSystem {
             rhs,
             order,
