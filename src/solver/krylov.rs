@@ -337,48 +337,39 @@ impl Ilu0 {
     /// Factors rows `first..n` of A again after their values changed, rows before `first`
     /// unchanged: the rows of an ILU(0) depend only on the rows above them, so a matrix whose
     /// changing rows are ordered last is refactored in time proportional to those rows (the
-    /// contact rows of a Newton matrix, [`super::newton_krylov`]).
+    /// contact rows of a Newton matrix, [`super::newton_krylov`]). From row 0, the two domains
+    /// of [`Ilu0::with_domains`] are factored on two threads.
     pub fn refactor_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), Error> {
-        let n = a.n;
-        let mut dense = vec![0.0; n];
-        let mut in_row = vec![false; n];
-        for i in first..n {
-            let (cols, vals) = a.row(i);
-            for (&c, &v) in cols.iter().zip(vals) {
-                dense[c as usize] = v;
-                in_row[c as usize] = true;
-            }
-            for k in cols.iter().map(|&k| k as usize).take_while(|&k| k < i) {
-                let l = dense[k] * self.inv_diag[k];
-                dense[k] = l;
-                let range = self.u_ptr[k]..self.u_ptr[k + 1];
-                for (&c, &u) in self.u_col[range.clone()].iter().zip(&self.u_val[range]) {
-                    if in_row[c as usize] {
-                        dense[c as usize] -= l * f64::from(u);
-                    }
-                }
-            }
-            let pivot = dense[i];
-            if pivot == 0.0 || !pivot.is_finite() {
-                return Err(Error::Factorization {
-                    stage: FactorStage::IncompleteLu,
-                    detail: format!("pivot {pivot} in row {i}"),
-                });
-            }
-            let (l_range, u_range) = (self.l_ptr[i]..self.l_ptr[i + 1], self.u_ptr[i]..self.u_ptr[i + 1]);
-            for (slot, &c) in self.l_val[l_range.clone()].iter_mut().zip(&self.l_col[l_range]) {
-                *slot = dense[c as usize] as f32;
-            }
-            for (slot, &c) in self.u_val[u_range.clone()].iter_mut().zip(&self.u_col[u_range]) {
-                *slot = dense[c as usize] as f32;
-            }
-            self.inv_diag[i] = 1.0 / pivot;
-            for &c in cols {
-                dense[c as usize] = 0.0;
-                in_row[c as usize] = false;
-            }
+        let [first_end, second_end] = self.parts;
+        let Ilu0 {
+            l_ptr,
+            l_col,
+            l_val,
+            u_ptr,
+            u_col,
+            u_val,
+            inv_diag,
+            ..
+        } = self;
+        let pattern = Pattern {
+            l_ptr,
+            l_col,
+            u_ptr,
+            u_col,
+        };
+        let mut sequential_from = first;
+        if first == 0 && second_end > 0 {
+            let (l1, l2) = l_val[..l_ptr[second_end]].split_at_mut(l_ptr[first_end]);
+            let (u1, u2) = u_val[..u_ptr[second_end]].split_at_mut(u_ptr[first_end]);
+            let (d1, d2) = inv_diag[..second_end].split_at_mut(first_end);
+            let (r1, r2) = rayon::join(
+                || pattern.factor_rows(a, 0..first_end, (l1, u1, d1)),
+                || pattern.factor_rows(a, first_end..second_end, (l2, u2, d2)),
+            );
+            r1.and(r2)?;
+            sequential_from = second_end;
         }
-        Ok(())
+        pattern.factor_rows_from(a, sequential_from..a.n, 0, (l_val, u_val, inv_diag))
     }
 
     /// Stored entries of L and U (the diagonal included).
@@ -441,6 +432,81 @@ impl Ilu0 {
                 + sparse_dot32(&cols[inside..], &vals[inside..], rest, rest_start);
             z[i - offset] = (z[i - offset] - sum) * self.inv_diag[i];
         }
+    }
+}
+
+/// The pattern of an [`Ilu0`], borrowed apart from its values so that two threads can fill
+/// the values of two domains.
+struct Pattern<'a> {
+    l_ptr: &'a [usize],
+    l_col: &'a [u32],
+    u_ptr: &'a [usize],
+    u_col: &'a [u32],
+}
+
+/// The values (L, U, inverted diagonal) of the factor's rows from some row on.
+type RowValues<'v> = (&'v mut [f32], &'v mut [f32], &'v mut [f64]);
+
+impl Pattern<'_> {
+    /// Factors `rows`, whose values start at row `rows.start` in `values`, from the rows of
+    /// the same slices only (a domain of [`Ilu0::with_domains`]).
+    fn factor_rows(&self, a: &CsrMatrix, rows: std::ops::Range<usize>, values: RowValues) -> Result<(), Error> {
+        let base = rows.start;
+        self.factor_rows_from(a, rows, base, values)
+    }
+
+    /// Factors `rows` (IKJ order), reading the U rows above them: `values` hold the rows from
+    /// `base` on, and every row that `rows` refer to lies there.
+    fn factor_rows_from(
+        &self,
+        a: &CsrMatrix,
+        rows: std::ops::Range<usize>,
+        base: usize,
+        (l_val, u_val, inv_diag): RowValues,
+    ) -> Result<(), Error> {
+        let (l0, u0) = (self.l_ptr[base], self.u_ptr[base]);
+        let mut dense = vec![0.0; a.n];
+        let mut in_row = vec![false; a.n];
+        for i in rows {
+            let (cols, vals) = a.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                dense[c as usize] = v;
+                in_row[c as usize] = true;
+            }
+            for k in cols.iter().map(|&k| k as usize).take_while(|&k| k < i) {
+                let l = dense[k] * inv_diag[k - base];
+                dense[k] = l;
+                let range = self.u_ptr[k]..self.u_ptr[k + 1];
+                let u_row = &u_val[range.start - u0..range.end - u0];
+                for (&c, &u) in self.u_col[range].iter().zip(u_row) {
+                    if in_row[c as usize] {
+                        dense[c as usize] -= l * f64::from(u);
+                    }
+                }
+            }
+            let pivot = dense[i];
+            if pivot == 0.0 || !pivot.is_finite() {
+                return Err(Error::Factorization {
+                    stage: FactorStage::IncompleteLu,
+                    detail: format!("pivot {pivot} in row {i}"),
+                });
+            }
+            let (l_range, u_range) = (self.l_ptr[i]..self.l_ptr[i + 1], self.u_ptr[i]..self.u_ptr[i + 1]);
+            let l_row = &mut l_val[l_range.start - l0..l_range.end - l0];
+            for (slot, &c) in l_row.iter_mut().zip(&self.l_col[l_range]) {
+                *slot = dense[c as usize] as f32;
+            }
+            let u_row = &mut u_val[u_range.start - u0..u_range.end - u0];
+            for (slot, &c) in u_row.iter_mut().zip(&self.u_col[u_range]) {
+                *slot = dense[c as usize] as f32;
+            }
+            inv_diag[i - base] = 1.0 / pivot;
+            for &c in cols {
+                dense[c as usize] = 0.0;
+                in_row[c as usize] = false;
+            }
+        }
+        Ok(())
     }
 }
 
