@@ -30,7 +30,8 @@ use super::OutputError;
 /// | 2D reference run (nx = 256, t = 1) | 6.39 MB, 0.018 s | 2.75 MB, 0.155 s | 3.24 MB, 0.036 s | **2.75 MB, 0.048 s** | 2.77 MB, 0.077 s | 3.49 MB, 0.011 s |
 /// | 3D example (40 × 10 × 10, t = 1) | 3.85 MB, 0.012 s | 2.16 MB, 0.099 s | 2.50 MB, 0.030 s | **2.15 MB, 0.037 s** | 2.16 MB, 0.050 s | 2.64 MB, 0.009 s |
 ///
-/// LZ4 (`vtkLZ4DataCompressor`) would be 4× faster again
+/// A run writes its frames on a thread beside the time loop (`driver::writer`), so this time is
+/// hidden where a core is free. LZ4 (`vtkLZ4DataCompressor`) would be 4× faster again
 /// but 27 % larger, and readers need an LZ4 library (meshio the `lz4` package), so zlib stays
 /// the only compressor. `Compression::None` (`output.compress = false`) remains for runs where
 /// the write time matters more than the disk.
