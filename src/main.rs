@@ -389,6 +389,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 overwrite,
                 stop: Some(stop_on_signals()?),
                 restart,
+                ..RunOptions::default()
             };
             let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
                 .inspect_err(|error| match error {
@@ -751,7 +752,8 @@ fn print_summary(s: &Summary) {
         println!("{:<34} {:>10.3} s", "  cutback levels set-up", t.cutback_setup);
     }
     println!("{:<34} {:>10.3} s", "  nonsmooth solver on Γ_C", t.contact_solver);
-    println!("{:<34} {:>10.3} s", "output", t.output);
+    println!("{:<34} {:>10.3} s", "output (waited for)", t.output);
+    println!("{:<34} {:>10.3} s", "  frames (writer thread)", t.frames);
     println!("{:<34} {:>10.3} s", "wall time", t.total);
     println!();
     println!(

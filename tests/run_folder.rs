@@ -496,3 +496,139 @@ fn frames_at_the_initial_state_every_nth_step_and_compressed() {
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&raw_dir).unwrap();
 }
+
+/// The regular files of `dir` whose names end with `suffix`, sorted.
+fn files_ending(dir: &Path, suffix: &str) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_type().unwrap().is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(suffix))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The frames written on the writer thread are the bytes of those written on the time loop's
+/// thread (`inline_frames`), with a frame at every step (the loop gets ahead of the writer and
+/// waits) and checkpoints in between (the loop waits for the frames before each).
+#[test]
+fn frames_from_the_writer_thread_are_the_bytes_of_inline_frames() {
+    let scenario = coarse(&["output.every=1", "output.checkpoint_every=5"]);
+    let problem = scenario.build().unwrap();
+    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let (threaded, inline) = (scratch("threaded"), scratch("inline"));
+    let a = driver::run(&problem, &params, &plan, &options(&threaded)).unwrap();
+    let inline_options = RunOptions {
+        inline_frames: true,
+        ..options(&inline)
+    };
+    let b = driver::run(&problem, &params, &plan, &inline_options).unwrap();
+    assert_eq!(a.status, RunStatus::Completed);
+    assert_eq!(b.status, RunStatus::Completed);
+
+    let frames: Vec<String> = (1..=16).map(|n| format!("solution_{n:04}.vtu")).collect();
+    assert_eq!(files_ending(&threaded, ".vtu"), frames);
+    assert_eq!(files_ending(&inline, ".vtu"), frames);
+    assert_eq!(pvd_files(&threaded), frames);
+    let mut names = frames;
+    names.extend(
+        files_ending(&inline, ".csv")
+            .into_iter()
+            .filter(|n| n.starts_with("contact_")),
+    );
+    names.push("solution.pvd".into());
+    assert_eq!(names.len(), 16 + 16 + 1, "{names:?}");
+    same_bytes(&threaded, &inline, &names);
+    let levels = |s: &driver::Summary| s.outputs.iter().map(|o| o.n).collect::<Vec<_>>();
+    assert_eq!(levels(&a), (1..=16).collect::<Vec<_>>());
+    assert_eq!(levels(&a), levels(&b));
+    assert!(a.timings.frames > 0.0 && b.timings.frames > 0.0);
+    for d in [threaded, inline] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// An I/O error of a frame (a folder where `solution_0006.vtu` goes) stops the run, on the
+/// writer thread as on the loop's: the error names the file, and the folder stays consistent —
+/// `solution.pvd` lists exactly the `.vtu` files present, each whole; no temporary file is
+/// left; `summary.json` says `failed`, with no output record of the failed frame; the last state
+/// is kept as a checkpoint and a frame.
+#[test]
+fn an_io_error_of_a_frame_stops_the_run_and_leaves_a_consistent_folder() {
+    let scenario = scenario();
+    let problem = scenario.build().unwrap();
+    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let whole = scratch("io-whole");
+    driver::run(&problem, &params, &plan, &options(&whole)).unwrap();
+    for inline_frames in [false, true] {
+        let dir = scratch(&format!("io-error-{inline_frames}"));
+        let obstacle = dir.join("solution_0006.vtu");
+        let failing = RunOptions {
+            inline_frames,
+            ..options(&dir)
+        };
+        let error = driver::run_observed(&problem, &params, &plan, &failing, |_, state, _| {
+            if state.n == 3 {
+                std::fs::create_dir(&obstacle).unwrap();
+            }
+        })
+        .err()
+        .unwrap();
+        assert!(
+            matches!(&error, Error::Output(thermocontact::output::OutputError::Io { path, .. }) if *path == obstacle),
+            "{error}"
+        );
+        let stopped = summary(&dir);
+        assert_eq!(stopped["status"], "failed", "{stopped}");
+        assert!(
+            stopped["failure"]["message"]
+                .as_str()
+                .unwrap()
+                .contains("solution_0006.vtu"),
+            "{stopped}"
+        );
+        let last = stopped["failure"]["last_step"].as_u64().unwrap() as usize;
+        // Inline, the run stops at the frame; on the writer thread, once the loop hears of it.
+        if inline_frames {
+            assert_eq!(last, 6);
+        } else {
+            assert!((6..=10).contains(&last), "{last}");
+        }
+        let recorded: Vec<u64> = stopped["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| o["n"].as_u64().unwrap())
+            .collect();
+        assert_eq!(recorded, [2, 4]);
+
+        let present = files_ending(&dir, ".vtu");
+        assert_eq!(pvd_files(&dir), present);
+        let mut expected = vec!["solution_0002.vtu".to_string(), "solution_0004.vtu".to_string()];
+        if last != 6 {
+            // The last state's frame (at 6 it is the obstacle's place again).
+            expected.push(format!("solution_{last:04}.vtu"));
+        }
+        assert_eq!(present, expected);
+        for name in &present {
+            assert_eq!(vtu_arrays(&dir.join(name)).len(), 7, "{name} is whole");
+        }
+        same_bytes(&whole, &dir, &expected[..2]);
+        let temporary: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
+            .collect();
+        assert!(temporary.is_empty(), "{temporary:?}");
+        let restart = Restart::read(&dir.join(CHECKPOINT_FILE)).unwrap();
+        assert_eq!(restart.checkpoint.state.n, last);
+        assert_eq!(
+            steps_without_seconds(&dir).len(),
+            last + 1,
+            "steps.csv: a header and a row per step"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    std::fs::remove_dir_all(&whole).unwrap();
+}

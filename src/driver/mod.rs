@@ -5,11 +5,18 @@
 //!
 //! ```text
 //! claim the folder → factor or precondition (time::LinearSystem::new) → set the solver up → steps (time::march_from)
-//!   each step: steps.csv record, log line; output steps: frames, solution.pvd rewritten (and
-//!   steps.csv, at most every 10 s);
-//!   every `checkpoint_every` steps: checkpoint.bin, steps.csv, summary.json ("running")
-//! → summary.json ("completed", or "failed" / "interrupted" with the last state written)
+//!   each step: steps.csv record, log line; output steps: the frame to the writer thread, which
+//!   writes it and rewrites solution.pvd (and steps.csv, at most every 10 s);
+//!   every `checkpoint_every` steps: the frames sent awaited, checkpoint.bin, steps.csv,
+//!   summary.json ("running")
+//! → the frames sent awaited → summary.json ("completed", or "failed" / "interrupted" with the
+//!   last state written)
 //! ```
+//!
+//! The frames are written on a thread beside the time loop (module `writer`: owned copies
+//! through a channel of one frame, so memory stays bounded), so that the loop, which mostly uses
+//! one core, does not wait for them; `RunOptions::inline_frames` writes them on the loop's
+//! thread instead, into the same bytes.
 //!
 //! **The folder never lies.** A run owns its folder ([`output::folder`]): a lock, and another
 //! run's results are refused, replaced (`overwrite`) or continued (`restart`). `summary.json`
@@ -21,6 +28,7 @@
 
 mod stop;
 mod summary;
+mod writer;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -38,6 +46,8 @@ use crate::solver::{LinearKind, SolverKind, SolverParams, StepInfo};
 use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolver, Stopped};
 
 pub use stop::StopFlag;
+use writer::FrameWriter;
+
 pub use summary::{CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings};
 
 /// How to run.
@@ -56,6 +66,9 @@ pub struct RunOptions {
     pub stop: Option<StopFlag>,
     /// Continue this checkpoint's run (its folder is `out_dir`) instead of starting at t = 0.
     pub restart: Option<Restart>,
+    /// Write the frames on the time loop's thread, the loop waiting for each, instead of on a
+    /// writer thread beside it (the default; `writer`): the same files either way.
+    pub inline_frames: bool,
 }
 
 /// A checkpoint to continue from, and where it was read (for messages).
@@ -360,185 +373,233 @@ pub fn run_observed(
     let mut last_line = Instant::now();
     let mut last_steps_write = Instant::now();
 
-    let mut output_time = 0.0;
-    // The initial state is a frame when an output time rounds to level 0 (a continued run has
-    // it already).
-    if first.n == 0 && output_levels.contains(&0) {
-        let clock = Instant::now();
-        let record = record(problem, &first, plan.slip_tolerance);
-        if let Some(files) = &files {
-            files.frame(&first, &record, &mut tally)?;
-        }
-        tally.outputs.push(record);
-        output_time += clock.elapsed().as_secs_f64();
-    }
-    let loop_clock = Instant::now();
-    let mut step_clock = Instant::now();
-    let first_step = first.n;
-    let marched = time::march_from(problem, &levels, first, |state, info| {
-        observer(problem, state, info);
-        let (residual, slip_nodes) = law_residual(problem, state, plan.slip_tolerance);
-        let step_record = StepRecord {
-            n: state.n,
-            t: state.t,
-            convexification_iterations: info.convexification_iterations,
-            inner_iterations: info.inner_iterations,
-            newton_iterations: info.newton_iterations,
-            descent_sweeps: info.descent_sweeps,
-            krylov_iterations: info.krylov_iterations,
-            substeps: info.substeps,
-            cutback_depth: info.cutback_depth,
-            // Only the paper's solver measures (77)–(80); the fast solver stops on the nodal
-            // law and leaves them unset, which a 0 would misreport as converged.
-            increments: match params.kind {
-                SolverKind::Paper => info.increments,
-                SolverKind::Fast => [f64::NAN; 4],
-            },
-            law_residual: residual,
-            slip_nodes,
-            stick_nodes: problem.contact.len() - slip_nodes,
-            seconds: step_clock.elapsed().as_secs_f64(),
-        };
-        tally.add_step(info, step_record);
-        if info.cutback_depth > 0 {
-            let cutback = CutbackRecord {
-                step: state.n,
-                t: state.t,
-                depth: info.cutback_depth,
-                substeps: info.substeps,
-            };
-            log(format!(
-                "step {} (t = {}): cut back, {} substeps, the shortest k/{}",
-                cutback.step,
-                cutback.t,
-                cutback.substeps,
-                1usize << cutback.depth
-            ));
-            tally.cutbacks.push(cutback);
-        }
-        bar.inc(1);
-        let clock = Instant::now();
-        let is_output = output_levels.contains(&state.n);
-        if is_output {
-            let record = record(problem, state, plan.slip_tolerance);
-            bar.set_message(format!(
-                "t = {:.3}: {} slip, {} stick",
-                record.t, record.slip_nodes, record.stick_nodes
-            ));
-            if let Some(files) = &files {
-                files.frame(state, &record, &mut tally)?;
-                // steps.csv grows with the run: rewritten at output times at most every 10 s
-                // (so that a long run with many frames does not rewrite it quadratically).
-                if last_steps_write.elapsed().as_secs_f64() >= 10.0 {
-                    files.steps(&tally)?;
-                    last_steps_write = Instant::now();
-                }
+    // The frames are written on a thread of the scope (module `writer`), which ends with it.
+    std::thread::scope(|scope| {
+        let mut writer = files.as_ref().map(|files| {
+            FrameWriter::start(
+                scope,
+                problem,
+                plan,
+                files.dir(),
+                tally.frames.clone(),
+                options.inline_frames,
+            )
+        });
+        let mut output_time = 0.0;
+        // The initial state is a frame when an output time rounds to level 0 (a continued run has
+        // it already).
+        if first.n == 0 && output_levels.contains(&0) {
+            let clock = Instant::now();
+            let record = record(problem, &first, plan.slip_tolerance);
+            if let Some(writer) = &mut writer {
+                writer.submit(&first, &record, &mut tally)?;
             }
             tally.outputs.push(record);
+            output_time += clock.elapsed().as_secs_f64();
         }
-        if let (Some(files), Some(every)) = (&files, plan.checkpoint_every) {
-            if state.n % every == 0 && state.n < n_steps {
-                count_work(&mut tally);
-                files.checkpoint(state, &tally)?;
-                files.steps(&tally)?;
-                files.summary(&setup.summary(&tally, RunStatus::Running, None, timings.clone()))?;
+        let loop_clock = Instant::now();
+        let mut step_clock = Instant::now();
+        let first_step = first.n;
+        let marched = time::march_from(problem, &levels, first, |state, info| {
+            observer(problem, state, info);
+            let (residual, slip_nodes) = law_residual(problem, state, plan.slip_tolerance);
+            let step_record = StepRecord {
+                n: state.n,
+                t: state.t,
+                convexification_iterations: info.convexification_iterations,
+                inner_iterations: info.inner_iterations,
+                newton_iterations: info.newton_iterations,
+                descent_sweeps: info.descent_sweeps,
+                krylov_iterations: info.krylov_iterations,
+                substeps: info.substeps,
+                cutback_depth: info.cutback_depth,
+                // Only the paper's solver measures (77)–(80); the fast solver stops on the nodal
+                // law and leaves them unset, which a 0 would misreport as converged.
+                increments: match params.kind {
+                    SolverKind::Paper => info.increments,
+                    SolverKind::Fast => [f64::NAN; 4],
+                },
+                law_residual: residual,
+                slip_nodes,
+                stick_nodes: problem.contact.len() - slip_nodes,
+                seconds: step_clock.elapsed().as_secs_f64(),
+            };
+            tally.add_step(info, step_record);
+            if info.cutback_depth > 0 {
+                let cutback = CutbackRecord {
+                    step: state.n,
+                    t: state.t,
+                    depth: info.cutback_depth,
+                    substeps: info.substeps,
+                };
+                log(format!(
+                    "step {} (t = {}): cut back, {} substeps, the shortest k/{}",
+                    cutback.step,
+                    cutback.t,
+                    cutback.substeps,
+                    1usize << cutback.depth
+                ));
+                tally.cutbacks.push(cutback);
             }
-        }
-        output_time += clock.elapsed().as_secs_f64();
-        if batch && (is_output || state.n == n_steps || last_line.elapsed().as_secs_f64() >= 10.0) {
-            last_line = Instant::now();
-            // The remaining steps at this process's pace so far.
-            let done = state.n - first_step;
-            let remaining = loop_clock.elapsed().as_secs_f64() / done.max(1) as f64 * (n_steps - state.n) as f64;
-            eprintln!(
-                "{}",
-                progress_line(&ProgressLine {
-                    record: &step_record,
-                    steps: n_steps,
-                    cutbacks: tally.cutbacks.len(),
-                    elapsed: start.elapsed().as_secs_f64(),
-                    remaining,
-                })
-            );
-        }
-        if let Some(cause) = options.stop.as_ref().and_then(StopFlag::requested) {
-            return Err(Error::Interrupted {
-                step: state.n,
-                time: state.t,
-                cause,
-            });
-        }
-        step_clock = Instant::now();
-        Ok(())
-    });
-    let (state, failure) = match marched {
-        Ok(state) => {
-            bar.finish_and_clear();
-            (state, None)
-        }
-        Err(stopped) => {
-            let Stopped { error, last } = *stopped;
-            // The caller reports the error itself.
-            bar.abandon();
-            (last, Some(error))
-        }
-    };
-    timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
-    let loop_stats = levels.step_stats();
-    timings.linear_solves = loop_stats.solve_seconds;
-    timings.right_hand_sides = loop_stats.rhs_seconds;
-    timings.cutback_setup = levels.cutback_setup_seconds();
-    timings.contact_solver =
-        timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
-
-    count_work(&mut tally);
-    let status = RunStatus::of(failure.as_ref());
-    let failure_record = failure.as_ref().map(|e| FailureRecord::new(e, &state));
-    let written = match &files {
-        Some(files) => {
+            bar.inc(1);
             let clock = Instant::now();
-            (|| -> Result<(), Error> {
-                if failure.is_some() {
-                    // A stopped run keeps its last completed state: as a checkpoint to continue
-                    // from (with the planned frames only: a continued run drops the next one),
-                    // and as a frame beside those written so far.
-                    if state.n > 0 {
-                        files.checkpoint(&state, &tally)?;
-                    }
-                    if !output_levels.contains(&state.n) {
-                        let record = record(problem, &state, plan.slip_tolerance);
-                        files.frame(&state, &record, &mut tally)?;
-                    }
-                } else {
-                    // A completed run's checkpoint is of no use any more, whether this run wrote
-                    // it (`checkpoint_every`) or the stopped run it continued did; left in place,
-                    // `--restart` would silently compute the end again from it.
-                    match std::fs::remove_file(files.dir().join(CHECKPOINT_FILE)) {
-                        Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(files.io(CHECKPOINT_FILE)(e)),
-                        _ => {}
+            // An error of an earlier frame stops the run here.
+            if let Some(writer) = &mut writer {
+                writer.poll(&mut tally)?;
+            }
+            let is_output = output_levels.contains(&state.n);
+            if is_output {
+                let record = record(problem, state, plan.slip_tolerance);
+                bar.set_message(format!(
+                    "t = {:.3}: {} slip, {} stick",
+                    record.t, record.slip_nodes, record.stick_nodes
+                ));
+                if let (Some(files), Some(writer)) = (&files, &mut writer) {
+                    writer.submit(state, &record, &mut tally)?;
+                    // steps.csv grows with the run: rewritten at output times at most every 10 s
+                    // (so that a long run with many frames does not rewrite it quadratically).
+                    if last_steps_write.elapsed().as_secs_f64() >= 10.0 {
+                        files.steps(&tally)?;
+                        last_steps_write = Instant::now();
                     }
                 }
-                files.steps(&tally)?;
-                timings.output = output_time + clock.elapsed().as_secs_f64();
-                timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-                files.summary(&setup.summary(&tally, status, failure_record.clone(), timings.clone()))
-            })()
-        }
-        None => Ok(()),
-    };
-    timings.output = timings.output.max(output_time);
-    timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
-    let summary = setup.summary(&tally, status, failure_record, timings);
-    match (failure, written) {
-        // The error that stopped the run comes first; one met while recording it is logged.
-        (Some(error), written) => {
-            if let Err(also) = written {
-                log(format!("error: {also}"));
+                tally.outputs.push(record);
             }
-            Err(error)
+            if let (Some(files), Some(every)) = (&files, plan.checkpoint_every) {
+                if state.n % every == 0 && state.n < n_steps {
+                    // The checkpoint and the summary list the frames on disk.
+                    if let Some(writer) = &mut writer {
+                        writer.flush(&mut tally)?;
+                    }
+                    count_work(&mut tally);
+                    files.checkpoint(state, &tally)?;
+                    files.steps(&tally)?;
+                    files.summary(&setup.summary(&tally, RunStatus::Running, None, timings.clone()))?;
+                }
+            }
+            output_time += clock.elapsed().as_secs_f64();
+            if batch && (is_output || state.n == n_steps || last_line.elapsed().as_secs_f64() >= 10.0) {
+                last_line = Instant::now();
+                // The remaining steps at this process's pace so far.
+                let done = state.n - first_step;
+                let remaining = loop_clock.elapsed().as_secs_f64() / done.max(1) as f64 * (n_steps - state.n) as f64;
+                eprintln!(
+                    "{}",
+                    progress_line(&ProgressLine {
+                        record: &step_record,
+                        steps: n_steps,
+                        cutbacks: tally.cutbacks.len(),
+                        elapsed: start.elapsed().as_secs_f64(),
+                        remaining,
+                    })
+                );
+            }
+            if let Some(cause) = options.stop.as_ref().and_then(StopFlag::requested) {
+                return Err(Error::Interrupted {
+                    step: state.n,
+                    time: state.t,
+                    cause,
+                });
+            }
+            step_clock = Instant::now();
+            Ok(())
+        });
+        let (state, mut failure) = match marched {
+            Ok(state) => {
+                bar.finish_and_clear();
+                (state, None)
+            }
+            Err(stopped) => {
+                let Stopped { error, last } = *stopped;
+                // The caller reports the error itself.
+                bar.abandon();
+                (last, Some(error))
+            }
+        };
+        timings.time_stepping = loop_clock.elapsed().as_secs_f64() - output_time;
+        let loop_stats = levels.step_stats();
+        timings.linear_solves = loop_stats.solve_seconds;
+        timings.right_hand_sides = loop_stats.rhs_seconds;
+        timings.cutback_setup = levels.cutback_setup_seconds();
+        timings.contact_solver =
+            timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
+
+        // The frames still queued are written before anything else is recorded. The writer's error
+        // stops a run that completed; one that stopped already reports its own error first.
+        if let Some(writer) = writer.take() {
+            let clock = Instant::now();
+            let (seconds, finished) = writer.finish(&mut tally);
+            output_time += clock.elapsed().as_secs_f64();
+            timings.frames = seconds;
+            if let Err(error) = finished {
+                match failure {
+                    None => failure = Some(error),
+                    Some(_) => log(format!("error: {error}")),
+                }
+            }
         }
-        (None, written) => written.map(|()| Run { summary, state }),
-    }
+
+        count_work(&mut tally);
+        let status = RunStatus::of(failure.as_ref());
+        let failure_record = failure.as_ref().map(|e| FailureRecord::new(e, &state));
+        let written = match &files {
+            Some(files) => {
+                let clock = Instant::now();
+                {
+                    // Each file is tried even where one before it failed, so that a stopped run
+                    // still leaves its summary: the first error comes back, the others are logged.
+                    let mut first = None;
+                    let mut keep = |written: Result<(), Error>| match (written, &first) {
+                        (Err(error), None) => first = Some(error),
+                        (Err(error), Some(_)) => log(format!("error: {error}")),
+                        (Ok(()), _) => {}
+                    };
+                    if failure.is_some() {
+                        // A stopped run keeps its last completed state: as a checkpoint to continue
+                        // from (with the planned frames only: a continued run drops the next one),
+                        // and as a frame beside those written so far, unless it has one (an output
+                        // time whose frame was written).
+                        if state.n > 0 {
+                            keep(files.checkpoint(&state, &tally));
+                        }
+                        if !tally.outputs.iter().any(|o| o.n == state.n) {
+                            let record = record(problem, &state, plan.slip_tolerance);
+                            keep(files.frame(&state, &record, &mut tally));
+                        }
+                    } else {
+                        // A completed run's checkpoint is of no use any more, whether this run wrote
+                        // it (`checkpoint_every`) or the stopped run it continued did; left in place,
+                        // `--restart` would silently compute the end again from it.
+                        match std::fs::remove_file(files.dir().join(CHECKPOINT_FILE)) {
+                            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                                keep(Err(files.io(CHECKPOINT_FILE)(e)))
+                            }
+                            _ => {}
+                        }
+                    }
+                    keep(files.steps(&tally));
+                    timings.output = output_time + clock.elapsed().as_secs_f64();
+                    timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
+                    keep(files.summary(&setup.summary(&tally, status, failure_record.clone(), timings.clone())));
+                    first.map_or(Ok(()), Err)
+                }
+            }
+            None => Ok(()),
+        };
+        timings.output = timings.output.max(output_time);
+        timings.total = problem.build_seconds + start.elapsed().as_secs_f64();
+        let summary = setup.summary(&tally, status, failure_record, timings);
+        match (failure, written) {
+            // The error that stopped the run comes first; one met while recording it is logged.
+            (Some(error), written) => {
+                if let Err(also) = written {
+                    log(format!("error: {also}"));
+                }
+                Err(error)
+            }
+            (None, written) => written.map(|()| Run { summary, state }),
+        }
+    })
 }
 
 /// `_0042.` in the file names of time level 42's frame ([`crate::output::folder::frame_step`]

@@ -30,8 +30,13 @@ pub struct Timings {
     pub cutback_setup: f64,
     /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest).
     pub contact_solver: f64,
-    /// Writing files.
+    /// Writing files, as far as the run waited for it: the frames are written on a thread
+    /// beside the time loop (`frames`), the loop waiting only where it gets two frames ahead,
+    /// before a checkpoint, and at the end.
     pub output: f64,
+    /// The frames' own time (fields, encoding, files), on the writer thread in parallel with the
+    /// time loop (in `output` where the run writes them inline, `RunOptions::inline_frames`).
+    pub frames: f64,
     /// Everything.
     pub total: f64,
 }
