@@ -121,10 +121,10 @@ fn krylov_iterations_stay_bounded_under_refinement() {
     );
 }
 
-/// `auto` is direct where the direct factor fits in half the machine's memory (always in 2D),
-/// iterative beyond; the paper's solver needs the direct path.
+/// `auto` is direct in 2D, and in 3D up to 70 000 unknowns where the direct factor fits in half
+/// the machine's memory, iterative beyond; the paper's solver needs the direct path.
 #[test]
-fn auto_picks_the_path_by_memory_and_the_paper_solver_needs_direct() {
+fn auto_picks_the_path_by_size_and_memory_and_the_paper_solver_needs_direct() {
     use thermocontact::solver::{LinearKind, SolverKind};
     let auto = LinearKind::Auto;
     let gib = (1u64 << 30) as f64;
@@ -133,8 +133,16 @@ fn auto_picks_the_path_by_memory_and_the_paper_solver_needs_direct() {
         LinearKind::Direct
     );
     assert_eq!(
-        auto.resolve(3, 98_334, SolverKind::Fast, 24.0 * gib),
+        auto.resolve(3, 46_970, SolverKind::Fast, 24.0 * gib),
         LinearKind::Direct
+    );
+    assert_eq!(
+        auto.resolve(3, 98_334, SolverKind::Fast, 24.0 * gib),
+        LinearKind::Iterative
+    );
+    assert_eq!(
+        auto.resolve(3, 46_970, SolverKind::Fast, 0.5 * gib),
+        LinearKind::Iterative
     );
     assert_eq!(
         auto.resolve(3, 972_270, SolverKind::Fast, 24.0 * gib),

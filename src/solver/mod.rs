@@ -73,21 +73,27 @@ impl LinearKind {
     /// take before it takes the iterative path.
     pub const AUTO_DIRECT_MEMORY_SHARE: f64 = 0.5;
 
+    /// The most unknowns for which `auto` takes the direct path in 3D: where the two paths'
+    /// whole runs cross.
+    pub const AUTO_DIRECT_UNKNOWNS_3D: usize = 70_000;
+
     /// Direct or iterative for a problem of `dim` dimensions and `unknowns` unknowns solved by
-    /// `kind` on a machine with `memory` bytes. `auto` is direct where the direct factor fits:
-    /// always in 2D (the factor has about 5× A's entries there), in 3D while the estimated peak
-    /// of the direct path ([`crate::resources::estimated_memory`]) is at most half the machine's
-    /// memory, and iterative beyond (the 3D factor's fill grows like N^{4/3}). Where both fit
-    /// the direct path is the faster one over a whole run (measured on the 3D example, 64 steps:
-    /// 47k unknowns 10 s against 18 s, 98k 39 s against 45 s: the iterative path pays a Krylov
-    /// solve per convexification iterate, the direct one a dense product on Γ_C). The paper's
-    /// solver needs the direct path (the condensation).
+    /// `kind` on a machine with `memory` bytes. `auto` is direct always in 2D (the factor has
+    /// about 5× A's entries there, and the iterative path pays a Krylov solve per
+    /// convexification iterate: 4.5 s against 1.2 s on the reference run), in 3D up to
+    /// [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns while the estimated peak of the direct path
+    /// ([`crate::resources::estimated_memory`]) is at most half the machine's memory, and
+    /// iterative beyond. Measured on the 3D example, 64 steps, whole runs (direct against
+    /// iterative): 17.6k unknowns 2.1 s against 3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s
+    /// against 30.4 s (and 2.3 GiB against 0.45 GiB); the 3D factor's fill grows like N^{4/3},
+    /// the iterative path's cost per iteration like N. The paper's solver needs the direct
+    /// path (the condensation).
     pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
         match self {
             LinearKind::Auto if kind == SolverKind::Paper || dim < 3 => LinearKind::Direct,
             LinearKind::Auto => {
                 let direct = crate::resources::estimated_memory(dim, unknowns as f64);
-                if direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory {
+                if unknowns <= Self::AUTO_DIRECT_UNKNOWNS_3D && direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory {
                     LinearKind::Direct
                 } else {
                     LinearKind::Iterative
