@@ -353,11 +353,12 @@ fn thread_independent_contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> 
 }
 
 /// Bitwise reproducible on any thread count: the CLI run on 1 and on 2 threads writes the same
-/// files, byte for byte (less the wall times and the run id), in 2D and 3D.
+/// files, byte for byte (less the wall times and the run id), in 2D and 3D, and on the iterative
+/// path (its ILU(0) sweeps run two domains on two threads).
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let paper3d = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/paper3d.toml");
-    let cases: [(&str, Vec<&str>); 2] = [
+    let cases: [(&str, Vec<&str>); 3] = [
         (
             "2d",
             vec!["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"],
@@ -374,6 +375,22 @@ fn results_do_not_depend_on_the_thread_count() {
                 "mesh.nz=2",
                 "--set",
                 "time.steps=4",
+            ],
+        ),
+        (
+            "3d-iterative",
+            vec![
+                paper3d,
+                "--set",
+                "mesh.nx=12",
+                "--set",
+                "mesh.ny=3",
+                "--set",
+                "mesh.nz=3",
+                "--set",
+                "time.steps=4",
+                "--set",
+                "solver.linear=iterative",
             ],
         ),
     ];
