@@ -185,3 +185,50 @@ fn the_cutback_depth_is_bounded_with_a_clear_error() {
         "{error}"
     );
 }
+
+/// A Krylov solve at its cap on the iterative path stops the run (no cutback here) with a
+/// failure record that names the linear solve and carries its residual history: the relative
+/// residual before its one iteration and after it, as GMRES estimates it, the last one the
+/// reported (true) residual to rounding.
+#[test]
+fn a_capped_krylov_solve_is_reported_with_its_residual_history() {
+    let out = scratch("krylov");
+    let result = Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+        .args(["run", "--quiet"])
+        .args([
+            "--set",
+            "mesh.nx=16",
+            "--set",
+            "mesh.ny=4",
+            "--set",
+            "time.steps=16",
+            "--set",
+            "solver.linear=iterative",
+            "--set",
+            "solver.max_krylov=1",
+            "--set",
+            "solver.cutback=false",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!result.status.success());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(stderr.contains("relative residual of the linear solve"), "{stderr}");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+    let solver = &summary["failure"]["solver"];
+    assert_eq!(solver["loop_name"], "GMRES");
+    assert_eq!(solver["iterations"], 1);
+    let history: Vec<f64> = (solver["residual_history"].as_array().unwrap().iter())
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(history.len(), 2, "{history:?}");
+    assert!(history[0] > 0.0, "{history:?}");
+    let (value, tolerance) = (solver["value"].as_f64().unwrap(), solver["tolerance"].as_f64().unwrap());
+    assert!((history[1] - value).abs() <= 1e-8 * value, "{history:?} against {value}");
+    assert!(history[1] < history[0], "{history:?}");
+    assert!(value > tolerance, "{value} against {tolerance}");
+    std::fs::remove_dir_all(&out).ok();
+}

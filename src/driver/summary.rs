@@ -193,7 +193,7 @@ impl FailureRecord {
                 time,
                 cutback_depth,
                 failure,
-            } => (Some(*step), Some(*time), Some(*cutback_depth), Some(*failure)),
+            } => (Some(*step), Some(*time), Some(*cutback_depth), Some(failure.clone())),
             _ => (None, None, None, None),
         };
         FailureRecord {

@@ -230,6 +230,7 @@ impl<'a> FastSolver<'a> {
                     criterion: Criterion::NodalLaw,
                     value: stall.law_residual,
                     tolerance: self.paper_params.tolerance,
+                    residual_history: Vec::new(),
                 }))
             }
         }
@@ -276,6 +277,7 @@ impl<'a> FastSolver<'a> {
                     criterion: Criterion::NodalLaw,
                     value: step.law_residual(&w, &xi, None) / g_min.max(f64::MIN_POSITIVE),
                     tolerance,
+                    residual_history: Vec::new(),
                 }));
             };
             info.convexification_iterations = m;
@@ -327,6 +329,7 @@ impl<'a> FastSolver<'a> {
             criterion,
             value,
             tolerance,
+            residual_history: Vec::new(),
         }))
     }
 }

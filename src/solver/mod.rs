@@ -231,7 +231,7 @@ impl Criterion {
 
 /// Why a step solver gave up: the loop, how long it ran, and the criterion that failed with its
 /// value and tolerance (the worst one against its tolerance, never one that passed).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StepFailure {
     /// `paper` or `fast`.
     pub solver: &'static str,
@@ -243,6 +243,10 @@ pub struct StepFailure {
     #[serde(serialize_with = "number_or_text")]
     pub value: f64,
     pub tolerance: f64,
+    /// A failed Krylov solve's relative residuals, before its first iteration and after each
+    /// one, as GMRES estimates them (empty for the other loops; not in JSON then).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub residual_history: Vec<f64>,
 }
 
 /// A finite number as a JSON number, ±∞ and NaN (which JSON lacks) as the strings "inf",

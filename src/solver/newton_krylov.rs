@@ -356,6 +356,7 @@ impl Linearization<'_> {
                 iterations,
                 rtol,
                 residual,
+                history,
                 ..
             }) => {
                 return Err(SolveError::NotConverged(StepFailure {
@@ -365,6 +366,7 @@ impl Linearization<'_> {
                     criterion: Criterion::LinearResidual,
                     value: residual,
                     tolerance: rtol,
+                    residual_history: history,
                 }))
             }
             Err(other) => return Err(other.into()),
@@ -527,6 +529,7 @@ impl<'a> NewtonKrylov<'a> {
             criterion,
             value,
             tolerance,
+            residual_history: Vec::new(),
         }))
     }
 

@@ -143,6 +143,7 @@ impl<'a> PaperSolver<'a> {
                     criterion: Criterion::IncrementXiNodal,
                     value: change / g_max,
                     tolerance: self.params.inner_tolerance,
+                    residual_history: Vec::new(),
                 }));
             }
             // The full fields of this iterate with the converged contact terms (half a solve).
@@ -178,6 +179,7 @@ impl<'a> PaperSolver<'a> {
             criterion,
             value,
             tolerance,
+            residual_history: Vec::new(),
         }))
     }
 }
