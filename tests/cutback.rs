@@ -227,7 +227,10 @@ fn a_capped_krylov_solve_is_reported_with_its_residual_history() {
     assert_eq!(history.len(), 2, "{history:?}");
     assert!(history[0] > 0.0, "{history:?}");
     let (value, tolerance) = (solver["value"].as_f64().unwrap(), solver["tolerance"].as_f64().unwrap());
-    assert!((history[1] - value).abs() <= 1e-8 * value, "{history:?} against {value}");
+    assert!(
+        (history[1] - value).abs() <= 1e-8 * value,
+        "{history:?} against {value}"
+    );
     assert!(history[1] < history[0], "{history:?}");
     assert!(value > tolerance, "{value} against {tolerance}");
     std::fs::remove_dir_all(&out).ok();

@@ -100,23 +100,24 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
         frames: Vec<PvdEntry>,
         inline: bool,
     ) -> Self {
-        let mut files = FrameFiles {
+        let files = |frames| FrameFiles {
             problem,
             plan,
             dir: dir.to_path_buf(),
             frames,
         };
         let mode = if inline {
-            Mode::Inline(files)
+            Mode::Inline(files(frames))
         } else {
             let (jobs, queue) = mpsc::sync_channel::<Job>(QUEUE);
             let (report, done) = mpsc::channel();
-            let handle = std::thread::Builder::new()
+            let mut thread_files = files(frames.clone());
+            let spawned = std::thread::Builder::new()
                 .name("frame writer".into())
                 .spawn_scoped(scope, move || {
                     for job in queue {
                         let clock = Instant::now();
-                        let outcome = files.write(&job.state, &job.record);
+                        let outcome = thread_files.write(&job.state, &job.record);
                         let failed = outcome.is_err();
                         let seconds = clock.elapsed().as_secs_f64();
                         // The loop gone, or this frame failed: no more frames (those queued are
@@ -125,12 +126,15 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
                             break;
                         }
                     }
-                })
-                .expect("a thread for the frame writer");
-            Mode::Thread {
-                jobs: Some(jobs),
-                done,
-                handle: Some(handle),
+                });
+            match spawned {
+                Ok(handle) => Mode::Thread {
+                    jobs: Some(jobs),
+                    done,
+                    handle: Some(handle),
+                },
+                // No thread to be had (the OS refused one): the frames are written inline.
+                Err(_) => Mode::Inline(files(frames)),
             }
         };
         FrameWriter {
