@@ -747,14 +747,6 @@ impl Scenario {
             ));
         }
         at_least_one("solver.max_krylov", s.max_krylov)?;
-        if s.kind == SolverKind::Paper && s.linear == LinearKind::Iterative {
-            return Err(invalid(
-                "solver.linear",
-                &"iterative",
-                "\"direct\" or \"auto\" with solver.kind = \"paper\" (the paper's solver works on the condensed problem, which needs the direct factor)",
-            ));
-        }
-
         if self.output.times.len() > MAX_OUTPUT_TIMES {
             return Err(invalid(
                 "output.times",

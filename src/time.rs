@@ -23,6 +23,7 @@ use crate::solver::matrix::StepMatrix;
 use crate::solver::newton::NewtonParams;
 use crate::solver::newton_krylov::{KrylovSystem, NewtonKrylov};
 use crate::solver::paper::{PaperParams, PaperSolver};
+use crate::solver::paper_krylov::PaperKrylov;
 use crate::solver::system::{norm2, State, StepSystem, SystemStats};
 use crate::solver::{LinearKind, SolveError, SolverKind, SolverParams, StepInfo};
 
@@ -131,28 +132,33 @@ pub enum StepSolver<'a> {
     Fast(FastSolver<'a>),
     /// Newton on all unknowns with Krylov solves (the iterative path).
     NewtonKrylov(NewtonKrylov<'a>),
+    /// The paper's loop with a Krylov solve per Uzawa iterate (the iterative path).
+    PaperKrylov(PaperKrylov<'a>),
 }
 
 impl<'a> StepSolver<'a> {
     /// Sets the chosen solver up on a linear system (on the direct path: the condensation onto
     /// Γ_C).
     pub fn new(problem: &'a Problem, linear: LinearSystem, params: &SolverParams) -> Result<Self, Error> {
-        let system = match linear {
-            LinearSystem::Direct(system) => system,
-            LinearSystem::Iterative(system) => {
-                return Ok(StepSolver::NewtonKrylov(NewtonKrylov::new(
-                    problem,
-                    system,
-                    params.tolerance,
-                    params.max_convexification,
-                )))
-            }
-        };
         let paper_params = PaperParams {
             tolerance: params.tolerance,
             max_convexification: params.max_convexification,
             inner_tolerance: params.inner_tolerance,
             max_inner: params.max_inner,
+        };
+        let system = match linear {
+            LinearSystem::Direct(system) => system,
+            LinearSystem::Iterative(system) => {
+                return Ok(match params.kind {
+                    SolverKind::Paper => StepSolver::PaperKrylov(PaperKrylov::new(problem, system, paper_params)?),
+                    SolverKind::Fast => StepSolver::NewtonKrylov(NewtonKrylov::new(
+                        problem,
+                        system,
+                        params.tolerance,
+                        params.max_convexification,
+                    )),
+                })
+            }
         };
         let paper = PaperSolver::new(problem, system, paper_params)?;
         Ok(match params.kind {
@@ -176,6 +182,7 @@ impl<'a> StepSolver<'a> {
             StepSolver::Paper(solver) => solver.step(previous, t),
             StepSolver::Fast(solver) => solver.step(previous, t),
             StepSolver::NewtonKrylov(solver) => solver.step(previous, t),
+            StepSolver::PaperKrylov(solver) => solver.step(previous, t),
         }
     }
 
@@ -184,14 +191,14 @@ impl<'a> StepSolver<'a> {
         match self {
             StepSolver::Paper(solver) => Some(solver.system()),
             StepSolver::Fast(solver) => Some(solver.system()),
-            StepSolver::NewtonKrylov(_) => None,
+            StepSolver::NewtonKrylov(_) | StepSolver::PaperKrylov(_) => None,
         }
     }
 
     /// Which path the solver is on.
     pub fn linear(&self) -> LinearKind {
         match self {
-            StepSolver::NewtonKrylov(_) => LinearKind::Iterative,
+            StepSolver::NewtonKrylov(_) | StepSolver::PaperKrylov(_) => LinearKind::Iterative,
             _ => LinearKind::Direct,
         }
     }
@@ -200,6 +207,7 @@ impl<'a> StepSolver<'a> {
     pub fn step_size(&self) -> f64 {
         match self {
             StepSolver::NewtonKrylov(solver) => solver.system().step_size(),
+            StepSolver::PaperKrylov(solver) => solver.system().step_size(),
             direct => direct.direct().expect("a direct solver").step_size(),
         }
     }
@@ -208,6 +216,7 @@ impl<'a> StepSolver<'a> {
     pub fn factor_nnz(&self) -> usize {
         match self {
             StepSolver::NewtonKrylov(solver) => solver.system().factor_nnz(),
+            StepSolver::PaperKrylov(solver) => solver.system().factor_nnz(),
             direct => direct.direct().expect("a direct solver").factor_nnz(),
         }
     }
@@ -216,6 +225,7 @@ impl<'a> StepSolver<'a> {
     pub fn stats(&self) -> SystemStats {
         match self {
             StepSolver::NewtonKrylov(solver) => solver.system().stats(),
+            StepSolver::PaperKrylov(solver) => solver.system().stats(),
             direct => direct.direct().expect("a direct solver").stats(),
         }
     }

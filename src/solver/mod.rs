@@ -3,7 +3,10 @@
 //! [`system::StepSystem`] holds the linear part of Problem 14, factored once per run;
 //! [`paper::PaperSolver`] is the convexification + augmented-Lagrangian solver of Problem 17;
 //! [`fast::FastSolver`] a semismooth Newton method on the same condensed problem, globalized by
-//! the descent of [`descent`] where Newton and the convexification loop both fail.
+//! the descent of [`descent`] where Newton and the convexification loop both fail. On the
+//! iterative path nothing is condensed: [`newton_krylov::NewtonKrylov`] (the fast solver's
+//! counterpart) and [`paper_krylov::PaperKrylov`] (the paper's loop) solve the whole step by
+//! GMRES + ILU(0) ([`krylov`]), in the order of [`bisection`].
 
 pub mod bisection;
 pub mod condensed;
@@ -15,6 +18,7 @@ pub mod matrix;
 pub mod newton;
 pub mod newton_krylov;
 pub mod paper;
+pub mod paper_krylov;
 pub mod system;
 
 use serde::{Deserialize, Serialize};
@@ -86,14 +90,16 @@ impl LinearKind {
     /// iterative beyond. Measured on the 3D example, 64 steps, whole runs (direct against
     /// iterative): 17.6k unknowns 2.1 s against 3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s
     /// against 30.4 s (and 2.3 GiB against 0.45 GiB); the 3D factor's fill grows like N^{4/3},
-    /// the iterative path's cost per iteration like N. The paper's solver needs the direct
-    /// path (the condensation).
+    /// the iterative path's cost per iteration like N. The paper's solver takes the direct path
+    /// wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa iterate
+    /// ([`paper_krylov`]).
     pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
         match self {
-            LinearKind::Auto if kind == SolverKind::Paper || dim < 3 => LinearKind::Direct,
+            LinearKind::Auto if dim < 3 => LinearKind::Direct,
             LinearKind::Auto => {
                 let direct = crate::resources::estimated_memory(dim, unknowns as f64);
-                if unknowns <= Self::AUTO_DIRECT_UNKNOWNS_3D && direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory {
+                let fits = direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory;
+                if fits && (unknowns <= Self::AUTO_DIRECT_UNKNOWNS_3D || kind == SolverKind::Paper) {
                     LinearKind::Direct
                 } else {
                     LinearKind::Iterative

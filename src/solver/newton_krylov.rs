@@ -83,14 +83,14 @@ use crate::problem::Problem;
 
 /// The rows of one contact node in the iterative path's ordering.
 #[derive(Debug, Clone)]
-struct NodeRows {
+pub(super) struct NodeRows {
     /// (tangent coordinate k, row of its velocity unknown) for the coordinates that are not
     /// held; the held ones keep w = ξ = 0.
-    tangent: Vec<(usize, usize)>,
+    pub(super) tangent: Vec<(usize, usize)>,
     /// The row of the node's temperature unknown, if θ is not prescribed there.
-    theta: Option<usize>,
+    pub(super) theta: Option<usize>,
     /// ℓ_i.
-    weight: f64,
+    pub(super) weight: f64,
     /// r_i of the Alart–Curnier function: the node's own stiffness A_rr / ℓ_i, the inverse of
     /// its local compliance (any r > 0 has the same solutions; this one shapes the iteration
     /// like the fast solver's 1/λ_max(C)).
@@ -100,18 +100,18 @@ struct NodeRows {
 /// The step matrix with the Γ_C velocity unknowns last, its ILU(0) and the right-hand side:
 /// the iterative counterpart of [`super::system::StepSystem`], set up once per step size.
 pub struct KrylovSystem {
-    rhs: StepRhs,
+    pub(super) rhs: StepRhs,
     /// Row i of the ordered system is unknown `order[i]`.
-    order: Vec<usize>,
+    pub(super) order: Vec<usize>,
     /// The first row of the Γ_C tangential velocities.
-    first_contact: usize,
-    nodes: Vec<NodeRows>,
+    pub(super) first_contact: usize,
+    pub(super) nodes: Vec<NodeRows>,
     /// The contact rows' values of A, rows `first_contact..n` one after the other
     /// ([`CsrMatrix::values_from`]).
-    base: Vec<f64>,
+    pub(super) base: Vec<f64>,
     /// Ã and its ILU(0), changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, Ilu0)>,
-    params: KrylovParams,
+    pub(super) params: KrylovParams,
     stats: Mutex<SystemStats>,
 }
 
@@ -233,11 +233,11 @@ impl KrylovSystem {
         *self.stats.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, (CsrMatrix, Ilu0)> {
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, (CsrMatrix, Ilu0)> {
         self.work.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    fn count(&self, update: impl FnOnce(&mut SystemStats)) {
+    pub(super) fn count(&self, update: impl FnOnce(&mut SystemStats)) {
         update(&mut self.stats.lock().unwrap_or_else(|e| e.into_inner()));
     }
 }
@@ -343,34 +343,8 @@ impl Linearization<'_> {
                 self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
             }
         }
-        let solved = gmres_from_residual(a, self.ilu, rhs, x, &mut self.residual, &sys.params);
-        sys.count(|s| {
-            s.solves += 1;
-            s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);
-            s.solve_seconds += clock.elapsed().as_secs_f64();
-        });
         info.newton_iterations += 1;
-        match solved {
-            Ok(solve) => info.krylov_iterations += solve.iterations,
-            Err(Error::KrylovNotConverged {
-                iterations,
-                rtol,
-                residual,
-                history,
-                ..
-            }) => {
-                return Err(SolveError::NotConverged(StepFailure {
-                    solver: "iterative",
-                    loop_name: "GMRES",
-                    iterations,
-                    criterion: Criterion::LinearResidual,
-                    value: residual,
-                    tolerance: rtol,
-                    residual_history: history,
-                }))
-            }
-            Err(other) => return Err(other.into()),
-        }
+        info.krylov_iterations += krylov_solve(sys, (a, self.ilu), rhs, x, &mut self.residual, clock)?;
 
         // The new iterate: w from x, ξ from the linearization (slip) or the rows (stick).
         let new_w = tangential(&sys.nodes, td, x, w.len());
@@ -399,9 +373,47 @@ impl Linearization<'_> {
     }
 }
 
+/// Solves Ã x = b̃ by GMRES from x (`residual`: b̃ − Ã x on entry when it has n entries, and
+/// after), counts the solve from `clock` on, and returns its Krylov iterations. A solve at its
+/// cap is a step failure of the linear solve, with its residual history.
+pub(super) fn krylov_solve(
+    sys: &KrylovSystem,
+    (a, ilu): (&CsrMatrix, &Ilu0),
+    rhs: &[f64],
+    x: &mut [f64],
+    residual: &mut Vec<f64>,
+    clock: Instant,
+) -> Result<usize, SolveError> {
+    let solved = gmres_from_residual(a, ilu, rhs, x, residual, &sys.params);
+    sys.count(|s| {
+        s.solves += 1;
+        s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);
+        s.solve_seconds += clock.elapsed().as_secs_f64();
+    });
+    match solved {
+        Ok(solve) => Ok(solve.iterations),
+        Err(Error::KrylovNotConverged {
+            iterations,
+            rtol,
+            residual,
+            history,
+            ..
+        }) => Err(SolveError::NotConverged(StepFailure {
+            solver: "iterative",
+            loop_name: "GMRES",
+            iterations,
+            criterion: Criterion::LinearResidual,
+            value: residual,
+            tolerance: rtol,
+            residual_history: history,
+        })),
+        Err(other) => Err(other.into()),
+    }
+}
+
 /// w_τ at the contact nodes, node-major in tangent coordinates (`len` values), from x in the
 /// system's order (0 at held coordinates).
-fn tangential(nodes: &[NodeRows], td: usize, x: &[f64], len: usize) -> Vec<f64> {
+pub(super) fn tangential(nodes: &[NodeRows], td: usize, x: &[f64], len: usize) -> Vec<f64> {
     let mut w = vec![0.0; len];
     for (i, node) in nodes.iter().enumerate() {
         for &(k, row) in &node.tangent {
