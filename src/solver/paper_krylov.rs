@@ -1,4 +1,4 @@
-//! The paper's solver on the iterative path: the loop of Problem 17 ([`super::paper::paper_step`])
+//! The paper's solver on the iterative path: the loop of Problem 17 (`paper::paper_step`)
 //! with each Uzawa iterate's w(ξ, h) from one Krylov solve of the whole step, A x = b + Σ_i ℓ_i
 //! ξ_i·t_i + Σ_i ℓ_i h_i e_θi, instead of a product with the condensed compliance C.
 //!
