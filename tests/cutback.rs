@@ -19,6 +19,20 @@ fn scratch(tag: &str) -> PathBuf {
     dir
 }
 
+/// `thermocontact run` of the coarse example (16 × 4 cells, 16 steps) into `out`, without
+/// cutback, with `sets` laid over it.
+fn run_coarse_without_cutback(out: &std::path::Path, sets: &[&str]) -> std::process::Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_thermocontact"));
+    command.args(["run", "--quiet"]);
+    for set in ["mesh.nx=16", "mesh.ny=4", "time.steps=16", "solver.cutback=false"]
+        .iter()
+        .chain(sets)
+    {
+        command.args(["--set", set]);
+    }
+    command.arg("--out").arg(out).output().unwrap()
+}
+
 /// Five convexification iterations are not enough at step 6 of the coarse example (it needs
 /// seven at k = 1/16), and the fast solver's descent is off: without cutback the run stops
 /// there. (With the descent the step is solved at k: tests/descent.rs.)
@@ -128,26 +142,7 @@ fn two_substeps_of_half_size_are_the_run_with_twice_the_steps() {
 #[test]
 fn a_run_that_stops_leaves_its_frames_its_last_state_and_a_failed_summary() {
     let out = scratch("stop");
-    let result = Command::new(env!("CARGO_BIN_EXE_thermocontact"))
-        .args(["run", "--quiet"])
-        .args([
-            "--set",
-            "mesh.nx=16",
-            "--set",
-            "mesh.ny=4",
-            "--set",
-            "time.steps=16",
-            "--set",
-            "solver.max_convexification=5",
-            "--set",
-            "solver.max_sweeps=0",
-            "--set",
-            "solver.cutback=false",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let result = run_coarse_without_cutback(&out, &["solver.max_convexification=5", "solver.max_sweeps=0"]);
     assert!(!result.status.success());
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(stderr.contains("time step 6"), "{stderr}");
@@ -193,26 +188,7 @@ fn the_cutback_depth_is_bounded_with_a_clear_error() {
 #[test]
 fn a_capped_krylov_solve_is_reported_with_its_residual_history() {
     let out = scratch("krylov");
-    let result = Command::new(env!("CARGO_BIN_EXE_thermocontact"))
-        .args(["run", "--quiet"])
-        .args([
-            "--set",
-            "mesh.nx=16",
-            "--set",
-            "mesh.ny=4",
-            "--set",
-            "time.steps=16",
-            "--set",
-            "solver.linear=iterative",
-            "--set",
-            "solver.max_krylov=1",
-            "--set",
-            "solver.cutback=false",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let result = run_coarse_without_cutback(&out, &["solver.linear=iterative", "solver.max_krylov=1"]);
     assert!(!result.status.success());
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(stderr.contains("relative residual of the linear solve"), "{stderr}");
