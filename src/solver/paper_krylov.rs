@@ -15,17 +15,14 @@
 
 use std::time::Instant;
 
-use super::krylov::{CsrMatrix, Ilu0};
+use super::condensed::largest_eigenvalue;
+use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0};
 use super::newton_krylov::{krylov_solve, tangential, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
 use super::system::State;
 use super::{SolveError, StepInfo};
 use crate::error::Error;
 use crate::problem::Problem;
-
-/// Power iterations for λ_max(C) at most, as on the direct path
-/// ([`super::condensed::Condensation::friction_spectral_bound`]).
-const MAX_POWER_ITERATIONS: usize = 200;
 
 /// The paper's solver on a [`KrylovSystem`].
 pub struct PaperKrylov<'a> {
@@ -37,25 +34,10 @@ pub struct PaperKrylov<'a> {
 }
 
 impl<'a> PaperKrylov<'a> {
-    /// The solver on `system`, whose matrix is restored to A; finds r by power iteration.
+    /// The solver on `system` (its matrix is A, as set up: this solver never linearizes it);
+    /// finds r by power iteration.
     pub fn new(problem: &'a Problem, system: KrylovSystem, params: PaperParams) -> Result<Self, Error> {
-        {
-            let mut guard = system.lock();
-            let (a, ilu) = &mut *guard;
-            a.values_from_mut(system.first_contact).copy_from_slice(&system.base);
-            ilu.refactor_from(a, system.first_contact)?;
-        }
-        // A power iteration's solve at its cap is the Krylov error it was.
-        let lambda_max = spectral_bound(problem, &system).map_err(|e| match e {
-            SolveError::Other(error) => error,
-            SolveError::NotConverged(failure) => Error::KrylovNotConverged {
-                method: "GMRES",
-                iterations: failure.iterations,
-                rtol: failure.tolerance,
-                residual: failure.value,
-                history: failure.residual_history,
-            },
-        })?;
+        let lambda_max = spectral_bound(problem, &system)?;
         Ok(PaperKrylov {
             problem,
             system,
@@ -88,6 +70,8 @@ impl<'a> PaperKrylov<'a> {
             previous,
             t,
             rhs: vec![0.0; b.len()],
+            change: vec![0.0; b.len()],
+            y: vec![0.0; b.len()],
             b,
             x,
             residual: Vec::new(),
@@ -123,6 +107,9 @@ struct KrylovStep<'s> {
     x: Vec<f64>,
     /// b̃ − A x after the last solve (empty before the first).
     residual: Vec<f64>,
+    /// Work vectors of a solve: its right-hand side b̃ − A x and its solution y.
+    change: Vec<f64>,
+    y: Vec<f64>,
     krylov_iterations: usize,
 }
 
@@ -138,29 +125,30 @@ impl KrylovStep<'_> {
         let sys = self.system;
         let td = self.problem.dim() - 1;
         let clock = Instant::now();
-        let mut rhs = self.b.clone();
+        // `change` takes b̃ − A x: the last residual minus the last b̃ (or −A x at the first
+        // solve), plus the new b̃, which `rhs` then keeps.
+        let change = &mut self.change;
+        if self.residual.is_empty() {
+            self.a.mul(&self.x, change);
+            change.iter_mut().for_each(|v| *v = -*v);
+        } else {
+            (change.iter_mut().zip(&self.residual).zip(&self.rhs)).for_each(|((c, r), old)| *c = r - old);
+        }
+        self.rhs.copy_from_slice(&self.b);
         for (i, node) in sys.nodes.iter().enumerate() {
             for &(k, row) in &node.tangent {
-                rhs[row] += node.weight * xi[i * td + k];
+                self.rhs[row] += node.weight * xi[i * td + k];
             }
             if let Some(row) = node.theta {
-                rhs[row] += node.weight * heat[i];
+                self.rhs[row] += node.weight * heat[i];
             }
         }
-        let change: Vec<f64> = if self.residual.is_empty() {
-            let mut ax = vec![0.0; rhs.len()];
-            self.a.mul(&self.x, &mut ax);
-            rhs.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
-        } else {
-            (self.residual.iter().zip(&rhs).zip(&self.rhs))
-                .map(|((r, new), old)| r + (new - old))
-                .collect()
-        };
-        let mut y = vec![0.0; change.len()];
-        self.residual = change.clone();
-        self.krylov_iterations += krylov_solve(sys, (self.a, self.ilu), &change, &mut y, &mut self.residual, clock)?;
-        self.x.iter_mut().zip(&y).for_each(|(x, y)| *x += y);
-        self.rhs = rhs;
+        change.iter_mut().zip(&self.rhs).for_each(|(c, new)| *c += new);
+        self.y.fill(0.0);
+        self.residual.clone_from(change);
+        self.krylov_iterations +=
+            krylov_solve(sys, (self.a, self.ilu), change, &mut self.y, &mut self.residual, clock)?;
+        self.x.iter_mut().zip(&self.y).for_each(|(x, y)| *x += y);
         Ok(())
     }
 }
@@ -182,23 +170,16 @@ impl LoadedStep for KrylovStep<'_> {
     }
 }
 
-/// λ_max(C) by power iteration, as [`super::condensed::Condensation::friction_spectral_bound`]
-/// (the same start, the same stop), each product C v one Krylov solve.
-fn spectral_bound(problem: &Problem, sys: &KrylovSystem) -> Result<f64, SolveError> {
+/// λ_max(C) by the direct path's power iteration ([`largest_eigenvalue`]), each product C v
+/// one Krylov solve: A x = Σ_i ℓ_i v_i·t_i, then w_τ of x. A solve at its cap is the Krylov
+/// error it was.
+fn spectral_bound(problem: &Problem, sys: &KrylovSystem) -> Result<f64, Error> {
     let td = problem.dim() - 1;
-    let n_t = problem.contact.len() * td;
-    if n_t == 0 {
-        return Ok(0.0);
-    }
     let guard = sys.lock();
     let (a, ilu) = &*guard;
     let n = sys.order.len();
     let (mut rhs, mut x, mut residual) = (vec![0.0; n], vec![0.0; n], Vec::new());
-    let mut v: Vec<f64> = (0..n_t).map(|i| 1.0 + 0.1 * (i % 7) as f64).collect();
-    let mut estimate = 0.0;
-    for _ in 0..MAX_POWER_ITERATIONS {
-        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        v.iter_mut().for_each(|x| *x /= norm);
+    largest_eigenvalue(problem.contact.len() * td, |v, y| {
         rhs.fill(0.0);
         for (i, node) in sys.nodes.iter().enumerate() {
             for &(k, row) in &node.tangent {
@@ -206,15 +187,8 @@ fn spectral_bound(problem: &Problem, sys: &KrylovSystem) -> Result<f64, SolveErr
             }
         }
         residual.clear();
-        krylov_solve(sys, (a, ilu), &rhs, &mut x, &mut residual, Instant::now())?;
-        let y = tangential(&sys.nodes, td, &x, n_t);
-        let new = y.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let settled = (new - estimate).abs() <= 1e-6 * new;
-        estimate = new;
-        v = y;
-        if settled {
-            break;
-        }
-    }
-    Ok(estimate)
+        gmres_from_residual(a, ilu, &rhs, &mut x, &mut residual, &sys.params)?;
+        y.copy_from_slice(&tangential(&sys.nodes, td, &x, y.len()));
+        Ok(())
+    })
 }
