@@ -186,49 +186,61 @@ impl<'a> StepSolver<'a> {
         }
     }
 
+    /// The solver's linear system, on whichever path.
+    fn system(&self) -> SystemRef<'_> {
+        match self {
+            StepSolver::Paper(solver) => SystemRef::Direct(solver.system()),
+            StepSolver::Fast(solver) => SystemRef::Direct(solver.system()),
+            StepSolver::NewtonKrylov(solver) => SystemRef::Iterative(solver.system()),
+            StepSolver::PaperKrylov(solver) => SystemRef::Iterative(solver.system()),
+        }
+    }
+
     /// The factored step matrix of the direct path (`None` on the iterative path).
     pub fn direct(&self) -> Option<&StepSystem> {
-        match self {
-            StepSolver::Paper(solver) => Some(solver.system()),
-            StepSolver::Fast(solver) => Some(solver.system()),
-            StepSolver::NewtonKrylov(_) | StepSolver::PaperKrylov(_) => None,
+        match self.system() {
+            SystemRef::Direct(system) => Some(system),
+            SystemRef::Iterative(_) => None,
         }
     }
 
     /// Which path the solver is on.
     pub fn linear(&self) -> LinearKind {
-        match self {
-            StepSolver::NewtonKrylov(_) | StepSolver::PaperKrylov(_) => LinearKind::Iterative,
-            _ => LinearKind::Direct,
+        match self.system() {
+            SystemRef::Direct(_) => LinearKind::Direct,
+            SystemRef::Iterative(_) => LinearKind::Iterative,
         }
     }
 
     /// The step size k of its linear system.
     pub fn step_size(&self) -> f64 {
-        match self {
-            StepSolver::NewtonKrylov(solver) => solver.system().step_size(),
-            StepSolver::PaperKrylov(solver) => solver.system().step_size(),
-            direct => direct.direct().expect("a direct solver").step_size(),
+        match self.system() {
+            SystemRef::Direct(system) => system.step_size(),
+            SystemRef::Iterative(system) => system.step_size(),
         }
     }
 
     /// Stored entries of the factor: the LDLᵀ's, or the ILU(0)'s on the iterative path.
     pub fn factor_nnz(&self) -> usize {
-        match self {
-            StepSolver::NewtonKrylov(solver) => solver.system().factor_nnz(),
-            StepSolver::PaperKrylov(solver) => solver.system().factor_nnz(),
-            direct => direct.direct().expect("a direct solver").factor_nnz(),
+        match self.system() {
+            SystemRef::Direct(system) => system.factor_nnz(),
+            SystemRef::Iterative(system) => system.factor_nnz(),
         }
     }
 
     /// The linear system's work counters.
     pub fn stats(&self) -> SystemStats {
-        match self {
-            StepSolver::NewtonKrylov(solver) => solver.system().stats(),
-            StepSolver::PaperKrylov(solver) => solver.system().stats(),
-            direct => direct.direct().expect("a direct solver").stats(),
+        match self.system() {
+            SystemRef::Direct(system) => system.stats(),
+            SystemRef::Iterative(system) => system.stats(),
         }
     }
+}
+
+/// A [`StepSolver`]'s linear system, borrowed.
+enum SystemRef<'s> {
+    Direct(&'s StepSystem),
+    Iterative(&'s KrylovSystem),
 }
 
 /// The step solvers of step sizes k, k/2, k/4, … (cutback levels 0, 1, 2, …): level 0 is
