@@ -256,6 +256,9 @@ pub struct Ilu0 {
     /// Rows `0..parts[0]` and `parts[0]..parts[1]` share no entry of A: the sweeps run them on
     /// two threads, then the rows from `parts[1]` on in sequence ([`Ilu0::with_domains`]).
     parts: [usize; 2],
+    /// The dense row of [`Ilu0::refactor_from`], kept between the refactorizations of the
+    /// contact rows at every Newton iteration.
+    scratch: RowScratch,
 }
 
 impl Ilu0 {
@@ -321,6 +324,7 @@ impl Ilu0 {
             u_val: vec![0.0f32; a.nnz() - n_lower - n],
             inv_diag: vec![0.0; n],
             parts,
+            scratch: RowScratch::new(n),
         };
         f.l_ptr.push(0);
         f.u_ptr.push(0);
@@ -349,6 +353,7 @@ impl Ilu0 {
             u_col,
             u_val,
             inv_diag,
+            scratch,
             ..
         } = self;
         let pattern = Pattern {
@@ -362,14 +367,23 @@ impl Ilu0 {
             let (l1, l2) = l_val[..l_ptr[second_end]].split_at_mut(l_ptr[first_end]);
             let (u1, u2) = u_val[..u_ptr[second_end]].split_at_mut(u_ptr[first_end]);
             let (d1, d2) = inv_diag[..second_end].split_at_mut(first_end);
+            // Each domain's rows refer only to its own: its values start at its first row.
             let (r1, r2) = rayon::join(
-                || pattern.factor_rows(a, 0..first_end, (l1, u1, d1)),
-                || pattern.factor_rows(a, first_end..second_end, (l2, u2, d2)),
+                || pattern.factor_rows(a, 0..first_end, 0, (l1, u1, d1), &mut RowScratch::new(a.n)),
+                || {
+                    pattern.factor_rows(
+                        a,
+                        first_end..second_end,
+                        first_end,
+                        (l2, u2, d2),
+                        &mut RowScratch::new(a.n),
+                    )
+                },
             );
             r1.and(r2)?;
             sequential_from = second_end;
         }
-        pattern.factor_rows_from(a, sequential_from..a.n, 0, (l_val, u_val, inv_diag))
+        pattern.factor_rows(a, sequential_from..a.n, 0, (l_val, u_val, inv_diag), scratch)
     }
 
     /// Stored entries of L and U (the diagonal included).
@@ -447,26 +461,35 @@ struct Pattern<'a> {
 /// The values (L, U, inverted diagonal) of the factor's rows from some row on.
 type RowValues<'v> = (&'v mut [f32], &'v mut [f32], &'v mut [f64]);
 
-impl Pattern<'_> {
-    /// Factors `rows`, whose values start at row `rows.start` in `values`, from the rows of
-    /// the same slices only (a domain of [`Ilu0::with_domains`]).
-    fn factor_rows(&self, a: &CsrMatrix, rows: std::ops::Range<usize>, values: RowValues) -> Result<(), Error> {
-        let base = rows.start;
-        self.factor_rows_from(a, rows, base, values)
-    }
+/// A row of the factorization spread over all columns, zero and unmarked between rows.
+#[derive(Debug, Clone)]
+struct RowScratch {
+    dense: Vec<f64>,
+    in_row: Vec<bool>,
+}
 
+impl RowScratch {
+    fn new(n: usize) -> Self {
+        RowScratch {
+            dense: vec![0.0; n],
+            in_row: vec![false; n],
+        }
+    }
+}
+
+impl Pattern<'_> {
     /// Factors `rows` (IKJ order), reading the U rows above them: `values` hold the rows from
     /// `base` on, and every row that `rows` refer to lies there.
-    fn factor_rows_from(
+    fn factor_rows(
         &self,
         a: &CsrMatrix,
         rows: std::ops::Range<usize>,
         base: usize,
         (l_val, u_val, inv_diag): RowValues,
+        scratch: &mut RowScratch,
     ) -> Result<(), Error> {
         let (l0, u0) = (self.l_ptr[base], self.u_ptr[base]);
-        let mut dense = vec![0.0; a.n];
-        let mut in_row = vec![false; a.n];
+        let RowScratch { dense, in_row } = scratch;
         for i in rows {
             let (cols, vals) = a.row(i);
             for (&c, &v) in cols.iter().zip(vals) {
@@ -486,6 +509,11 @@ impl Pattern<'_> {
             }
             let pivot = dense[i];
             if pivot == 0.0 || !pivot.is_finite() {
+                // The scratch is kept for the next refactorization: leave it clean.
+                for &c in cols {
+                    dense[c as usize] = 0.0;
+                    in_row[c as usize] = false;
+                }
                 return Err(Error::Factorization {
                     stage: FactorStage::IncompleteLu,
                     detail: format!("pivot {pivot} in row {i}"),
