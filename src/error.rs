@@ -169,6 +169,8 @@ pub enum FactorStage {
     ContactCompliance,
     /// The incomplete LU factor ILU(0) that preconditions the Krylov solver.
     IncompleteLu,
+    /// The AMG hierarchy of the velocity block (PETSc's GAMG, `solver.preconditioner = "amg"`).
+    Multigrid,
 }
 
 impl std::fmt::Display for FactorStage {
@@ -180,6 +182,7 @@ impl std::fmt::Display for FactorStage {
             FactorStage::Layout => "the factor's layout",
             FactorStage::ContactCompliance => "the contact compliance's Cholesky factor",
             FactorStage::IncompleteLu => "the incomplete LU factor ILU(0)",
+            FactorStage::Multigrid => "the AMG hierarchy of the velocity block (PETSc GAMG)",
         })
     }
 }

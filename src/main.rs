@@ -135,6 +135,11 @@ enum Command {
         /// 56 takes about 20 s.
         #[arg(long, default_value_t = 56)]
         coarse_k_cells: usize,
+        /// The preconditioners of the 3D suite's iterative runs, each run once per entry:
+        /// `ilu` (ILU(0)) and `amg` (ILU(0) sweeps around PETSc's GAMG on the velocity block;
+        /// needs a build with `--features petsc`).
+        #[arg(long, value_delimiter = ',', default_value = "ilu")]
+        preconditioners: Vec<String>,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -340,9 +345,18 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             inverse_k,
             direct_up_to,
             coarse_k_cells,
+            preconditioners,
         } => {
             if three_d {
-                bench_3d(&out, &cells_3d, steps_3d, inverse_k, direct_up_to, coarse_k_cells)
+                let suite = Suite3d {
+                    cells: cells_3d,
+                    steps: steps_3d,
+                    inverse_k,
+                    direct_up_to,
+                    coarse_k_cells,
+                    preconditioners,
+                };
+                bench_3d(&out, &suite)
             } else if hard {
                 bench_hard(&out)
             } else {
@@ -532,16 +546,19 @@ fn bench_hard(out: &std::path::Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `bench --3d`: the 3D example at growing sizes on both linear paths, then one size at
-/// k = 1/8.
-fn bench_3d(
-    out: &std::path::Path,
-    cells: &[usize],
+/// What `bench --3d` runs (its options).
+struct Suite3d {
+    cells: Vec<usize>,
     steps: usize,
     inverse_k: usize,
     direct_up_to: usize,
     coarse_k_cells: usize,
-) -> anyhow::Result<()> {
+    preconditioners: Vec<String>,
+}
+
+/// `bench --3d`: the 3D example at growing sizes on both linear paths, then one size at
+/// k = 1/8.
+fn bench_3d(out: &std::path::Path, suite: &Suite3d) -> anyhow::Result<()> {
     use thermocontact::bench::scale::{format_scale_table, measure_3d};
     let exe = std::env::current_exe()?;
     let scenario = std::path::Path::new("scenarios/paper3d.toml");
@@ -551,28 +568,29 @@ fn bench_3d(
         scenario.display()
     );
     anyhow::ensure!(
-        inverse_k > 0 && steps > 0,
+        suite.inverse_k > 0 && suite.steps > 0,
         "--inverse-k and --steps-3d must be positive"
     );
-    std::fs::create_dir_all(out)?;
-    let k = 1.0 / inverse_k as f64;
-    let mut runs: Vec<(&str, usize, f64)> = Vec::new();
-    for &nx in cells {
-        if nx <= direct_up_to {
-            runs.push(("direct", nx, k));
-        }
-        runs.push(("iterative", nx, k));
+    if let Some(bad) = (suite.preconditioners.iter()).find(|p| !["ilu", "amg"].contains(&p.as_str())) {
+        anyhow::bail!("--preconditioners: `{bad}` is not a preconditioner (expected ilu or amg)");
     }
-    if coarse_k_cells > 0 && inverse_k != 8 {
-        if coarse_k_cells <= direct_up_to {
-            runs.push(("direct", coarse_k_cells, 1.0 / 8.0));
+    std::fs::create_dir_all(out)?;
+    let k = 1.0 / suite.inverse_k as f64;
+    let mut cases: Vec<(usize, f64)> = suite.cells.iter().map(|&nx| (nx, k)).collect();
+    if suite.coarse_k_cells > 0 && suite.inverse_k != 8 {
+        cases.push((suite.coarse_k_cells, 1.0 / 8.0));
+    }
+    let mut runs: Vec<(&str, &str, usize, f64)> = Vec::new();
+    for (nx, k) in cases {
+        if nx <= suite.direct_up_to {
+            runs.push(("direct", "ilu", nx, k));
         }
-        runs.push(("iterative", coarse_k_cells, 1.0 / 8.0));
+        runs.extend(suite.preconditioners.iter().map(|p| ("iterative", p.as_str(), nx, k)));
     }
     let mut rows = Vec::new();
-    for (linear, nx, k) in runs {
-        eprintln!("{linear}, nx = {nx}, k = 1/{} …", (1.0 / k).round());
-        let row = measure_3d(&exe, out, scenario, linear, nx, steps, k)?;
+    for (linear, preconditioner, nx, k) in runs {
+        eprintln!("{linear} ({preconditioner}), nx = {nx}, k = 1/{} …", (1.0 / k).round());
+        let row = measure_3d(&exe, out, scenario, linear, preconditioner, nx, suite.steps, k)?;
         eprintln!(
             "  {} in {:.1} s: {:.3} s per step, {:.0} MiB",
             row.status,
@@ -738,7 +756,11 @@ fn print_summary(s: &Summary) {
     println!();
     println!("{:<34} {:>10.3} s", "assembly", t.assembly);
     if s.linear == "iterative" {
-        println!("{:<34} {:>10.3} s", "ILU(0) preconditioner", t.factorization);
+        let label = match s.preconditioner.as_deref() {
+            Some("amg") => "ILU(0) + AMG preconditioner",
+            _ => "ILU(0) preconditioner",
+        };
+        println!("{:<34} {:>10.3} s", label, t.factorization);
     } else {
         println!("{:<34} {:>10.3} s", "factorization", t.factorization);
         println!("{:<34} {:>10.3} s", "solver set-up (condensation)", t.solver_setup);

@@ -18,7 +18,7 @@ use crate::loads::{Datum, Expression};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
 use crate::problem::{InitialFields, LoadTarget, Problem, ProblemBuilder, TimeGrid};
-use crate::solver::krylov::KrylovParams;
+use crate::solver::krylov::{KrylovParams, PreconditionerKind};
 use crate::solver::system::State;
 use crate::solver::{LinearKind, SolverKind, SolverParams};
 
@@ -430,6 +430,7 @@ pub struct SolverSpec {
     pub linear: LinearKind,
     pub krylov_tolerance: f64,
     pub max_krylov: usize,
+    pub preconditioner: PreconditionerKind,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -747,6 +748,13 @@ impl Scenario {
             ));
         }
         at_least_one("solver.max_krylov", s.max_krylov)?;
+        if s.preconditioner == PreconditionerKind::Amg && !cfg!(feature = "petsc") {
+            return Err(invalid(
+                "solver.preconditioner",
+                &"amg",
+                "\"ilu\": this build has no AMG (build thermocontact with `--features petsc`, which needs PETSc)",
+            ));
+        }
         if self.output.times.len() > MAX_OUTPUT_TIMES {
             return Err(invalid(
                 "output.times",
@@ -1038,6 +1046,7 @@ impl Scenario {
             krylov: KrylovParams {
                 rtol: s.krylov_tolerance,
                 max_iterations: s.max_krylov,
+                preconditioner: s.preconditioner,
                 ..KrylovParams::default()
             },
         }

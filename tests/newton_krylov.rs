@@ -94,6 +94,39 @@ fn iterative_path_matches_the_direct_path_with_tresca_friction() {
     );
 }
 
+/// With the AMG coarse correction (`solver.preconditioner = "amg"`, feature `petsc`) the
+/// iterative path reaches the same solution, 3D with slip weakening and with symmetry planes
+/// (contact nodes with a held tangential coordinate: padded slots in the AMG's blocks), at
+/// k = 1/16 and 1/8.
+#[cfg(feature = "petsc")]
+#[test]
+fn amg_preconditioned_path_matches_the_direct_path() {
+    let summary = compare(
+        Some(PAPER3D),
+        &[
+            "mesh.nx=12",
+            "mesh.ny=3",
+            "mesh.nz=3",
+            "time.steps=16",
+            "solver.preconditioner=amg",
+        ],
+    );
+    assert_eq!(summary.preconditioner.as_deref(), Some("amg"));
+    compare(
+        Some(PAPER3D),
+        &[
+            "mesh.nx=12",
+            "mesh.ny=2",
+            "mesh.nz=3",
+            "time.steps=8",
+            "geometry.lengths=[40.0, 5.0, 10.0]",
+            "boundary.symmetry=[\"y-\"]",
+            "boundary.neumann=[\"x+\", \"y+\", \"z+\"]",
+            "solver.preconditioner=amg",
+        ],
+    );
+}
+
 /// The paper's solver on the iterative path runs the direct path's iterates, w(ξ, h) from a
 /// Krylov solve instead of the condensed compliances: the same iteration counts and the same
 /// fields to the Krylov tolerance, in 2D and 3D.

@@ -15,6 +15,9 @@ use super::loglog_slope;
 pub struct ScaleRow {
     /// `direct` or `iterative`.
     pub linear: String,
+    /// The iterative path's preconditioner, `ilu` or `amg` (absent on the direct path).
+    #[serde(default)]
+    pub preconditioner: Option<String>,
     /// Cells along x, y, z.
     pub cells: [usize; 3],
     pub unknowns: usize,
@@ -45,19 +48,37 @@ pub struct ScaleRow {
 /// 972k unknowns.
 pub const DEFAULT_SIZES: [usize; 4] = [56, 72, 104, 156];
 
+impl ScaleRow {
+    /// The row's path in tables: `direct`, `iterative` (ILU(0)) or `iterative/amg`.
+    pub fn path(&self) -> String {
+        match self.preconditioner.as_deref() {
+            Some("amg") => format!("{}/amg", self.linear),
+            _ => self.linear.clone(),
+        }
+    }
+}
+
 /// Runs the 3D example (`scenario`, a path) with nx × nx/4 × nx/4 cells for `steps` steps of
-/// size `k` on the `linear` path in a child process (outputs off) and reads its summary.
+/// size `k` on the `linear` path (the iterative one with `preconditioner`, `ilu` or `amg`) in a
+/// child process (outputs off) and reads its summary.
+#[allow(clippy::too_many_arguments)]
 pub fn measure_3d(
     exe: &Path,
     work: &Path,
     scenario: &Path,
     linear: &str,
+    preconditioner: &str,
     nx: usize,
     steps: usize,
     k: f64,
 ) -> anyhow::Result<ScaleRow> {
     let ny = (nx / 4).max(1);
-    let dir = work.join(format!("3d-{linear}-{nx}x{ny}x{ny}-k{}", (1.0 / k).round()));
+    let label = if linear == "iterative" && preconditioner != "ilu" {
+        format!("{linear}-{preconditioner}")
+    } else {
+        linear.to_string()
+    };
+    let dir = work.join(format!("3d-{label}-{nx}x{ny}x{ny}-k{}", (1.0 / k).round()));
     let final_time = k * steps as f64;
     let sets = [
         format!("mesh.nx={nx}"),
@@ -67,6 +88,7 @@ pub fn measure_3d(
         format!("time.final_time={final_time}"),
         format!("output.times=[{final_time}]"),
         format!("solver.linear={linear}"),
+        format!("solver.preconditioner={preconditioner}"),
         "output.vtk=false".into(),
         "output.csv=false".into(),
     ];
@@ -98,6 +120,7 @@ pub fn measure_3d(
         .max(1) as f64;
     Ok(ScaleRow {
         linear: summary["linear"].as_str().unwrap_or(linear).to_string(),
+        preconditioner: summary["preconditioner"].as_str().map(str::to_string),
         cells: [nx, ny, ny],
         unknowns: int(&summary["unknowns"]),
         contact_nodes: int(&summary["contact_nodes"]),
@@ -119,7 +142,7 @@ pub fn measure_3d(
 /// The table of `bench --3d`, with the growth exponents of each path in the unknowns.
 pub fn format_scale_table(rows: &[ScaleRow]) -> String {
     let mut out = format!(
-        "{:<9} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>9} {:>11} {:>8} {:>9}\n",
+        "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>9} {:>11} {:>8} {:>9}\n",
         "path",
         "cells",
         "unknowns",
@@ -136,8 +159,8 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<9} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>9.1} {:>11} {:>8} {:>9.1}\n",
-            r.linear,
+            "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>9.1} {:>11} {:>8} {:>9.1}\n",
+            r.path(),
             format!("{}×{}×{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
             format!("1/{}", (1.0 / r.k).round()),
@@ -152,10 +175,14 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
             r.wall,
         ));
     }
-    for linear in ["direct", "iterative"] {
+    let mut paths: Vec<String> = rows.iter().map(ScaleRow::path).collect();
+    paths.dedup();
+    paths.sort();
+    paths.dedup();
+    for linear in paths {
         let same: Vec<&ScaleRow> = rows
             .iter()
-            .filter(|r| r.linear == linear && r.status == "completed")
+            .filter(|r| r.path() == linear && r.status == "completed")
             .collect();
         // One k only: the exponents are in the unknowns at a fixed step size.
         let Some(k) = same.first().map(|r| r.k) else { continue };
@@ -177,7 +204,7 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
     for r in rows.iter().filter(|r| r.failure.is_some()) {
         out.push_str(&format!(
             "{} {}×{}×{}: {}\n",
-            r.linear,
+            r.path(),
             r.cells[0],
             r.cells[1],
             r.cells[2],

@@ -183,6 +183,8 @@ impl Setup<'_> {
             descent_sweeps: tally.descent_sweeps,
             krylov_iterations: tally.krylov_iterations,
             linear: self.linear.name().to_string(),
+            preconditioner: (self.linear == LinearKind::Iterative)
+                .then(|| self.params.krylov.preconditioner.name().to_string()),
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,

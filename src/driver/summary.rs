@@ -105,6 +105,10 @@ pub struct Summary {
     pub factor_nnz: usize,
     /// The linear path the run took: `direct` or `iterative` (`solver.linear`, `auto` resolved).
     pub linear: String,
+    /// The iterative path's preconditioner, `ilu` or `amg` (`solver.preconditioner`; absent on
+    /// the direct path).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preconditioner: Option<String>,
     /// Krylov iterations over all linear solves (iterative path; 0 on the direct path).
     pub krylov_iterations: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.

@@ -8,6 +8,7 @@
 //! counterpart) and [`paper_krylov::PaperKrylov`] (the paper's loop) solve the whole step by
 //! GMRES + ILU(0) ([`krylov`]), in the order of [`bisection`].
 
+pub mod amg;
 pub mod bisection;
 pub mod condensed;
 pub mod descent;
@@ -19,6 +20,8 @@ pub mod newton;
 pub mod newton_krylov;
 pub mod paper;
 pub mod paper_krylov;
+#[cfg(feature = "petsc")]
+pub mod petsc;
 pub mod system;
 
 use serde::{Deserialize, Serialize};

@@ -71,8 +71,9 @@
 use std::sync::Mutex;
 use std::time::Instant;
 
+use super::amg::VelocityAmg;
 use super::bisection::{level_bisection, Part};
-use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0, KrylovParams};
+use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0, KrylovParams, PreconditionerKind, SolveInfo};
 use super::matrix::{assemble_by_columns, StepRhs};
 use super::newton::{max_diff, node_law_residual, slip_linearization};
 use super::system::{contact_tangential_unknowns, norm2 as norm, State, SystemStats};
@@ -111,6 +112,8 @@ pub struct KrylovSystem {
     pub(super) base: Vec<f64>,
     /// Ã and its ILU(0), changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, Ilu0)>,
+    /// The AMG coarse correction of the velocities, with `solver.preconditioner = "amg"`.
+    amg: Option<VelocityAmg>,
     pub(super) params: KrylovParams,
     stats: Mutex<SystemStats>,
 }
@@ -206,6 +209,10 @@ impl KrylovSystem {
             })
             .collect();
         let ilu = Ilu0::with_domains(&a, parts)?;
+        let amg = match params.preconditioner {
+            PreconditionerKind::Ilu => None,
+            PreconditionerKind::Amg => Some(VelocityAmg::new(problem, &a, &order)?),
+        };
         Ok(KrylovSystem {
             rhs,
             order,
@@ -213,6 +220,7 @@ impl KrylovSystem {
             nodes,
             base,
             work: Mutex::new((a, ilu)),
+            amg,
             params,
             stats: Mutex::new(SystemStats::default()),
         })
@@ -226,6 +234,41 @@ impl KrylovSystem {
     /// Stored entries of A and of its ILU(0) factor (the same pattern).
     pub fn factor_nnz(&self) -> usize {
         self.lock().1.nnz()
+    }
+
+    /// The AMG coarse correction, if the preconditioner has one.
+    pub fn amg(&self) -> Option<&VelocityAmg> {
+        self.amg.as_ref()
+    }
+
+    /// Solves Ã x = b̃ by GMRES from x with this system's preconditioner (see
+    /// [`gmres_from_residual`] for `residual`).
+    pub(super) fn gmres(
+        &self,
+        (a, ilu): (&CsrMatrix, &Ilu0),
+        rhs: &[f64],
+        x: &mut [f64],
+        residual: &mut Vec<f64>,
+    ) -> Result<SolveInfo, Error> {
+        match &self.amg {
+            None => gmres_from_residual(a, ilu, rhs, x, residual, &self.params),
+            Some(amg) => gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params),
+        }
+    }
+
+    /// Solves A x = b with the step matrix itself (its Γ_C rows as assembled, no contact
+    /// linearization), b and x in the unknowns' numbering, x holding the initial guess: one
+    /// solve of the constant matrix with this system's preconditioner, for studies and tests.
+    pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, Error> {
+        let mut guard = self.lock();
+        let (a, ilu) = &mut *guard;
+        a.values_from_mut(self.first_contact).copy_from_slice(&self.base);
+        ilu.refactor_from(a, self.first_contact)?;
+        let b_ordered: Vec<f64> = self.order.iter().map(|&o| b[o]).collect();
+        let mut x_ordered: Vec<f64> = self.order.iter().map(|&o| x[o]).collect();
+        let info = self.gmres((a, ilu), &b_ordered, &mut x_ordered, &mut Vec::new())?;
+        self.order.iter().zip(&x_ordered).for_each(|(&o, v)| x[o] = *v);
+        Ok(info)
     }
 
     /// The work counters so far.
@@ -384,7 +427,7 @@ pub(super) fn krylov_solve(
     residual: &mut Vec<f64>,
     clock: Instant,
 ) -> Result<usize, SolveError> {
-    let solved = gmres_from_residual(a, ilu, rhs, x, residual, &sys.params);
+    let solved = sys.gmres((a, ilu), rhs, x, residual);
     sys.count(|s| {
         s.solves += 1;
         s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);

@@ -16,7 +16,7 @@
 use std::time::Instant;
 
 use super::condensed::largest_eigenvalue;
-use super::krylov::{gmres_from_residual, CsrMatrix, Ilu0};
+use super::krylov::{CsrMatrix, Ilu0};
 use super::newton_krylov::{krylov_solve, tangential, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
 use super::system::State;
@@ -187,7 +187,7 @@ fn spectral_bound(problem: &Problem, sys: &KrylovSystem) -> Result<f64, Error> {
             }
         }
         residual.clear();
-        gmres_from_residual(a, ilu, &rhs, &mut x, &mut residual, &sys.params)?;
+        sys.gmres((a, ilu), &rhs, &mut x, &mut residual)?;
         y.copy_from_slice(&tangential(&sys.nodes, td, &x, y.len()));
         Ok(())
     })

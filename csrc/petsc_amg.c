@@ -1,0 +1,196 @@
+/* The thin C layer between thermocontact and PETSc (cargo feature `petsc`): smoothed-aggregation
+ * AMG (PCGAMG) on a sparse SPD matrix with a given near-nullspace, set up once, applied as one
+ * V-cycle per call.
+ *
+ * Why C and not Rust declarations of PETSc's API: the ABI of PETSc's types depends on how the
+ * library was configured (PetscInt may be 32 or 64 bits, MPI_Comm is a pointer in Open MPI and
+ * an int in MPICH, PETSC_COMM_SELF is a macro). Compiled against the installed headers, this
+ * file fixes them, and exports plain C types only: int (checked against PetscInt below),
+ * double, and an opaque handle. */
+#include <petscksp.h>
+#include <stdio.h>
+#include <string.h>
+
+#if defined(PETSC_USE_COMPLEX) || !defined(PETSC_USE_REAL_DOUBLE)
+#error "thermocontact needs PETSc with real double-precision scalars (Debian: libpetsc-real-dev)"
+#endif
+#if defined(PETSC_USE_64BIT_INDICES)
+#define TC_PETSC_INT_BITS 64
+#else
+#define TC_PETSC_INT_BITS 32
+#endif
+
+/* The first error of the last failing call, for the Rust side's typed error. */
+static char tc_message[512];
+
+static PetscErrorCode tc_record_error(MPI_Comm comm, int line, const char *fun, const char *file,
+                                      PetscErrorCode n, PetscErrorType p, const char *mess, void *ctx)
+{
+  (void)comm; (void)ctx;
+  if (p == PETSC_ERROR_INITIAL)
+    snprintf(tc_message, sizeof tc_message, "%s (%s:%d): %s (PETSc error %d)", fun, file, line,
+             mess ? mess : "", (int)n);
+  return n;
+}
+
+const char *tc_petsc_last_error(void) { return tc_message; }
+
+int tc_petsc_int_bits(void) { return TC_PETSC_INT_BITS; }
+
+/* PetscInitialize once per process, without PETSc's signal handlers (thermocontact handles
+ * SIGINT/SIGTERM itself: stop after the step, write a checkpoint). PETSC_OPTIONS in the
+ * environment still reaches the options database (e.g. "-tc_pc_gamg_threshold 0.02"). */
+int tc_petsc_initialize(void)
+{
+  PetscBool done;
+  PetscErrorCode ierr = PetscInitialized(&done);
+  if (ierr) return (int)ierr;
+  if (done) return 0;
+  static char  name[] = "thermocontact", nosig[] = "-no_signal_handler";
+  static char *args[] = {name, nosig, NULL};
+  int          argc = 2;
+  char       **argv = args;
+  ierr = PetscInitialize(&argc, &argv, NULL, NULL);
+  if (ierr) {
+    snprintf(tc_message, sizeof tc_message, "PetscInitialize failed (PETSc error %d)", (int)ierr);
+    return (int)ierr;
+  }
+  ierr = PetscPushErrorHandler(tc_record_error, NULL);
+  return (int)ierr;
+}
+
+struct tc_amg {
+  Mat A;
+  KSP ksp;
+  Vec x, y;
+};
+typedef struct tc_amg tc_amg;
+
+void tc_amg_destroy(tc_amg *amg)
+{
+  if (!amg) return;
+  KSPDestroy(&amg->ksp);
+  MatDestroy(&amg->A);
+  VecDestroy(&amg->x);
+  VecDestroy(&amg->y);
+  free(amg);
+}
+
+/* Sets up GAMG on the n × n CSR matrix (row_ptr, col, val; sorted columns; n a multiple of bs,
+ * the unknowns of a node consecutive) with the n_modes near-nullspace vectors `modes` (n values
+ * each, one after the other, orthonormal). */
+static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, const int *row_ptr, const int *col,
+                               const double *val, int n_modes, const double *modes)
+{
+  MatNullSpace nsp;
+  Vec         *vecs;
+  PC           pc;
+  PetscFunctionBeginUser;
+  PetscCall(MatCreate(PETSC_COMM_SELF, &amg->A));
+  PetscCall(MatSetSizes(amg->A, n, n, n, n));
+  PetscCall(MatSetType(amg->A, MATSEQAIJ));
+  PetscCall(MatSetBlockSize(amg->A, bs));
+  PetscCall(MatSeqAIJSetPreallocationCSR(amg->A, row_ptr, col, val));
+  PetscCall(MatSetOption(amg->A, MAT_SPD, PETSC_TRUE));
+  PetscCall(MatSetOption(amg->A, MAT_SPD_ETERNAL, PETSC_TRUE));
+
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &amg->x));
+  PetscCall(VecSetBlockSize(amg->x, bs));
+  PetscCall(VecDuplicate(amg->x, &amg->y));
+  PetscCall(VecDuplicateVecs(amg->x, n_modes, &vecs));
+  for (int m = 0; m < n_modes; ++m) {
+    PetscScalar *v;
+    PetscCall(VecGetArrayWrite(vecs[m], &v));
+    memcpy(v, modes + (size_t)m * (size_t)n, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArrayWrite(vecs[m], &v));
+  }
+  PetscCall(MatNullSpaceCreate(PETSC_COMM_SELF, PETSC_FALSE, n_modes, vecs, &nsp));
+  PetscCall(MatSetNearNullSpace(amg->A, nsp));
+  PetscCall(MatNullSpaceDestroy(&nsp));
+  PetscCall(VecDestroyVecs(n_modes, &vecs));
+
+  PetscCall(KSPCreate(PETSC_COMM_SELF, &amg->ksp));
+  PetscCall(KSPSetOptionsPrefix(amg->ksp, "tc_"));
+  PetscCall(KSPSetOperators(amg->ksp, amg->A, amg->A));
+  PetscCall(KSPSetType(amg->ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(amg->ksp, &pc));
+  PetscCall(PCSetType(pc, PCGAMG));
+  PetscCall(KSPSetFromOptions(amg->ksp));
+  PetscCall(KSPSetUp(amg->ksp));
+  PetscFunctionReturn(0);
+}
+
+int tc_amg_create(int n, int bs, const int *row_ptr, const int *col, const double *val,
+                  int n_modes, const double *modes, tc_amg **out)
+{
+  tc_message[0] = '\0';
+  *out = NULL;
+  tc_amg *amg = calloc(1, sizeof *amg);
+  if (!amg) {
+    snprintf(tc_message, sizeof tc_message, "out of memory");
+    return PETSC_ERR_MEM;
+  }
+  /* The arrays are int; MatSeqAIJSetPreallocationCSR reads PetscInt. */
+#if TC_PETSC_INT_BITS == 64
+  PetscInt *rp = NULL, *cl = NULL;
+  PetscErrorCode ierr = PetscMalloc2(n + 1, &rp, row_ptr[n], &cl);
+  if (!ierr) {
+    for (int i = 0; i <= n; ++i) rp[i] = row_ptr[i];
+    for (int p = 0; p < row_ptr[n]; ++p) cl[p] = col[p];
+    ierr = tc_setup(amg, n, bs, rp, cl, val, n_modes, modes);
+    PetscFree2(rp, cl);
+  }
+#else
+  PetscErrorCode ierr = tc_setup(amg, n, bs, row_ptr, col, val, n_modes, modes);
+#endif
+  if (ierr) {
+    tc_amg_destroy(amg);
+    return (int)ierr;
+  }
+  *out = amg;
+  return 0;
+}
+
+/* y = B⁻¹ x, B⁻¹ one V-cycle. */
+int tc_amg_apply(tc_amg *amg, const double *x, double *y)
+{
+  PC pc;
+  PetscErrorCode ierr;
+  tc_message[0] = '\0';
+  ierr = KSPGetPC(amg->ksp, &pc);
+  if (!ierr) ierr = VecPlaceArray(amg->x, (PetscScalar *)x);
+  if (!ierr) ierr = VecPlaceArray(amg->y, y);
+  if (!ierr) ierr = PCApply(pc, amg->x, amg->y);
+  VecResetArray(amg->x);
+  VecResetArray(amg->y);
+  return (int)ierr;
+}
+
+/* The operator complexity: stored entries of all levels' matrices over the finest's. */
+double tc_amg_operator_complexity(tc_amg *amg)
+{
+  PC       pc;
+  PetscInt levels = 0;
+  double   total = 0, finest = 0;
+  if (KSPGetPC(amg->ksp, &pc) || PCMGGetLevels(pc, &levels)) return -1;
+  for (PetscInt l = 0; l < levels; ++l) {
+    KSP     smoother;
+    Mat     op;
+    MatInfo info;
+    if (PCMGGetSmoother(pc, l, &smoother) || KSPGetOperators(smoother, &op, NULL) ||
+        MatGetInfo(op, MAT_LOCAL, &info))
+      return -1;
+    total += info.nz_used;
+    if (l == levels - 1) finest = info.nz_used;
+  }
+  return finest > 0 ? total / finest : -1;
+}
+
+/* The number of levels of the hierarchy. */
+int tc_amg_levels(tc_amg *amg)
+{
+  PC       pc;
+  PetscInt levels = 0;
+  if (KSPGetPC(amg->ksp, &pc) || PCMGGetLevels(pc, &levels)) return -1;
+  return (int)levels;
+}
