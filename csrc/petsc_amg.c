@@ -63,6 +63,8 @@ struct tc_amg {
   Mat A;
   KSP ksp;
   Vec x, y;
+  /* With 64-bit PetscInt: the row pointers and columns converted from the caller's int. */
+  PetscInt *row_ptr, *col;
 };
 typedef struct tc_amg tc_amg;
 
@@ -73,24 +75,24 @@ void tc_amg_destroy(tc_amg *amg)
   MatDestroy(&amg->A);
   VecDestroy(&amg->x);
   VecDestroy(&amg->y);
+  PetscFree(amg->row_ptr);
+  PetscFree(amg->col);
   free(amg);
 }
 
 /* Sets up GAMG on the n × n CSR matrix (row_ptr, col, val; sorted columns; n a multiple of bs,
  * the unknowns of a node consecutive) with the n_modes near-nullspace vectors `modes` (n values
- * each, one after the other, orthonormal). */
-static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, const int *row_ptr, const int *col,
-                               const double *val, int n_modes, const double *modes)
+ * each, one after the other, orthonormal). The matrix uses the caller's arrays in place (no
+ * copy: 0.7 GB at 10⁶ unknowns), which must outlive the handle. */
+static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, PetscInt *col, double *val,
+                               int n_modes, const double *modes)
 {
   MatNullSpace nsp;
   Vec         *vecs;
   PC           pc;
   PetscFunctionBeginUser;
-  PetscCall(MatCreate(PETSC_COMM_SELF, &amg->A));
-  PetscCall(MatSetSizes(amg->A, n, n, n, n));
-  PetscCall(MatSetType(amg->A, MATSEQAIJ));
+  PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_ptr, col, val, &amg->A));
   PetscCall(MatSetBlockSize(amg->A, bs));
-  PetscCall(MatSeqAIJSetPreallocationCSR(amg->A, row_ptr, col, val));
   PetscCall(MatSetOption(amg->A, MAT_SPD, PETSC_TRUE));
   PetscCall(MatSetOption(amg->A, MAT_SPD_ETERNAL, PETSC_TRUE));
 
@@ -120,9 +122,10 @@ static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, const int *row_ptr, c
   PetscFunctionReturn(0);
 }
 
-int tc_amg_create(int n, int bs, const int *row_ptr, const int *col, const double *val,
-                  int n_modes, const double *modes, tc_amg **out)
+int tc_amg_create(int n, int bs, int *row_ptr, int *col, double *val, int n_modes, const double *modes,
+                  tc_amg **out)
 {
+  PetscErrorCode ierr;
   tc_message[0] = '\0';
   *out = NULL;
   tc_amg *amg = calloc(1, sizeof *amg);
@@ -130,18 +133,17 @@ int tc_amg_create(int n, int bs, const int *row_ptr, const int *col, const doubl
     snprintf(tc_message, sizeof tc_message, "out of memory");
     return PETSC_ERR_MEM;
   }
-  /* The arrays are int; MatSeqAIJSetPreallocationCSR reads PetscInt. */
 #if TC_PETSC_INT_BITS == 64
-  PetscInt *rp = NULL, *cl = NULL;
-  PetscErrorCode ierr = PetscMalloc2(n + 1, &rp, row_ptr[n], &cl);
+  /* The index arrays are int; a 64-bit PetscInt needs them converted (and kept). */
+  ierr = PetscMalloc1(n + 1, &amg->row_ptr);
+  if (!ierr) ierr = PetscMalloc1(row_ptr[n], &amg->col);
   if (!ierr) {
-    for (int i = 0; i <= n; ++i) rp[i] = row_ptr[i];
-    for (int p = 0; p < row_ptr[n]; ++p) cl[p] = col[p];
-    ierr = tc_setup(amg, n, bs, rp, cl, val, n_modes, modes);
-    PetscFree2(rp, cl);
+    for (int i = 0; i <= n; ++i) amg->row_ptr[i] = row_ptr[i];
+    for (int p = 0; p < row_ptr[n]; ++p) amg->col[p] = col[p];
+    ierr = tc_setup(amg, n, bs, amg->row_ptr, amg->col, val, n_modes, modes);
   }
 #else
-  PetscErrorCode ierr = tc_setup(amg, n, bs, row_ptr, col, val, n_modes, modes);
+  ierr = tc_setup(amg, n, bs, row_ptr, col, val, n_modes, modes);
 #endif
   if (ierr) {
     tc_amg_destroy(amg);

@@ -112,7 +112,7 @@ impl VelocityAmg {
             row_ptr.push(i32::try_from(col.len()).map_err(|_| too_large(col.len()))?);
         }
         let modes = rigid_body_modes(problem, &padded);
-        let gamg = Gamg::new(&row_ptr, &col, &val, d, &modes)?;
+        let gamg = Gamg::new(row_ptr, col, val, d, &modes)?;
         let n = a.n();
         Ok(VelocityAmg {
             gamg,
@@ -267,7 +267,7 @@ mod unavailable {
     pub(super) enum Gamg {}
 
     impl Gamg {
-        pub(super) fn new(_: &[i32], _: &[i32], _: &[f64], _: usize, _: &[Vec<f64>]) -> Result<Self, Error> {
+        pub(super) fn new(_: Vec<i32>, _: Vec<i32>, _: Vec<f64>, _: usize, _: &[Vec<f64>]) -> Result<Self, Error> {
             Err(Error::Factorization {
                 stage: FactorStage::Multigrid,
                 detail: "this build has no AMG: build thermocontact with `--features petsc` (needs PETSc)".into(),

@@ -34,9 +34,9 @@ extern "C" {
     fn tc_amg_create(
         n: c_int,
         bs: c_int,
-        row_ptr: *const c_int,
-        col: *const c_int,
-        val: *const c_double,
+        row_ptr: *mut c_int,
+        col: *mut c_int,
+        val: *mut c_double,
         n_modes: c_int,
         modes: *const c_double,
         out: *mut *mut RawAmg,
@@ -80,6 +80,44 @@ fn initialized() -> Result<(), Error> {
         .map_err(amg_error)
 }
 
+/// The CSR arrays are a matrix PETSc can use in place: row pointers from 0, non-decreasing, to
+/// the entry count; columns in range and increasing within each row; n a multiple of the block
+/// size; each mode n values. PETSc checks none of this on arrays it is handed.
+fn check_csr(row_ptr: &[i32], col: &[i32], val: &[f64], block_size: usize, modes: &[Vec<f64>]) -> Result<(), Error> {
+    let n = row_ptr.len().saturating_sub(1);
+    let refuse = |what: String| Err(amg_error(format!("the matrix given to GAMG: {what}")));
+    if row_ptr.first() != Some(&0) || row_ptr.windows(2).any(|w| w[0] > w[1]) {
+        return refuse("row pointers do not rise from 0".into());
+    }
+    let nnz = row_ptr[n] as usize;
+    if col.len() != nnz || val.len() != nnz {
+        return refuse(format!(
+            "{nnz} entries by the row pointers, {} columns, {} values",
+            col.len(),
+            val.len()
+        ));
+    }
+    if i32::try_from(n).is_err() {
+        return refuse(format!("{n} rows exceed 32-bit indices"));
+    }
+    for i in 0..n {
+        let row = &col[row_ptr[i] as usize..row_ptr[i + 1] as usize];
+        if row.iter().any(|&c| c < 0 || c as usize >= n) || row.windows(2).any(|w| w[0] >= w[1]) {
+            return refuse(format!("row {i} has columns {row:?} (expected increasing, below {n})"));
+        }
+    }
+    if block_size == 0 || !n.is_multiple_of(block_size) {
+        return refuse(format!("{n} rows are not blocks of {block_size}"));
+    }
+    if let Some(m) = modes.iter().position(|m| m.len() != n) {
+        return refuse(format!(
+            "near-nullspace vector {m} has {} values for {n} rows",
+            modes[m].len()
+        ));
+    }
+    Ok(())
+}
+
 /// The handle, used by one thread at a time: PETSc is not thread-safe, and a V-cycle writes
 /// into the handle's work vectors.
 struct Handle(NonNull<RawAmg>);
@@ -91,50 +129,42 @@ unsafe impl Send for Handle {}
 /// A GAMG hierarchy of one SPD matrix, applied as one V-cycle.
 pub struct Gamg {
     handle: Mutex<Handle>,
+    /// The matrix's CSR arrays, which PETSc's matrix uses in place (dropped after the handle).
+    _csr: (Vec<i32>, Vec<i32>, Vec<f64>),
     n: usize,
     levels: usize,
     operator_complexity: f64,
 }
 
 impl Gamg {
-    /// Sets up GAMG on the n × n CSR matrix (`row_ptr`, `col`, `val`, sorted columns) whose
-    /// unknowns come in blocks of `block_size` per node, with the near-nullspace `modes`
-    /// (orthonormal, n values each).
+    /// Sets up GAMG on the n × n CSR matrix (`row_ptr`, `col`, `val`; each row's columns
+    /// increasing) whose unknowns come in blocks of `block_size` per node, with the
+    /// near-nullspace `modes` (orthonormal, n values each). PETSc works on the arrays in place.
     pub fn new(
-        row_ptr: &[i32],
-        col: &[i32],
-        val: &[f64],
+        row_ptr: Vec<i32>,
+        mut col: Vec<i32>,
+        mut val: Vec<f64>,
         block_size: usize,
         modes: &[Vec<f64>],
     ) -> Result<Self, Error> {
+        let mut row_ptr = row_ptr;
+        check_csr(&row_ptr, &col, &val, block_size, modes)?;
         initialized()?;
-        let n = row_ptr.len().saturating_sub(1);
+        let n = row_ptr.len() - 1;
         // SAFETY: no arguments.
         let int_bits = unsafe { tc_petsc_int_bits() };
-        let nnz = row_ptr.last().copied().unwrap_or(0);
-        let shapes_agree = usize::try_from(nnz).is_ok_and(|nnz| nnz == col.len() && nnz == val.len())
-            && modes.iter().all(|m| m.len() == n)
-            && block_size > 0
-            && n.is_multiple_of(block_size);
-        if !shapes_agree {
-            return Err(amg_error(format!(
-                "inconsistent input: {n} rows, {} columns, {} values, {nnz} entries by the row pointers, \
-                 block size {block_size}",
-                col.len(),
-                val.len()
-            )));
-        }
         let flat: Vec<f64> = modes.iter().flatten().copied().collect();
         let mut raw = std::ptr::null_mut();
-        // SAFETY: the arrays have the lengths checked above and outlive the call (PETSc copies
-        // them); `raw` is written on success.
+        // SAFETY: `check_csr` checked the arrays (lengths, ranges, order); the matrix keeps
+        // pointers into them, and they live in the returned value until after the handle is
+        // destroyed (Drop). `raw` is written on success.
         let code = unsafe {
             tc_amg_create(
                 n as c_int,
                 block_size as c_int,
-                row_ptr.as_ptr(),
-                col.as_ptr(),
-                val.as_ptr(),
+                row_ptr.as_mut_ptr(),
+                col.as_mut_ptr(),
+                val.as_mut_ptr(),
                 modes.len() as c_int,
                 flat.as_ptr(),
                 &mut raw,
@@ -155,6 +185,7 @@ impl Gamg {
         };
         Ok(Gamg {
             handle: Mutex::new(Handle(handle)),
+            _csr: (row_ptr, col, val),
             n,
             levels: usize::try_from(levels).unwrap_or(0),
             operator_complexity: complexity,
@@ -215,7 +246,7 @@ mod tests {
             row_ptr.push(col.len() as i32);
         }
         let mode = vec![1.0 / (n as f64).sqrt(); n];
-        let amg = Gamg::new(&row_ptr, &col, &val, 1, &[mode]).unwrap();
+        let amg = Gamg::new(row_ptr.clone(), col.clone(), val.clone(), 1, &[mode]).unwrap();
         assert!(amg.levels() >= 3, "{} levels", amg.levels());
         assert!(amg.operator_complexity() > 1.0 && amg.operator_complexity() < 2.0);
         let a_mul = |x: &[f64]| -> Vec<f64> {
@@ -239,19 +270,23 @@ mod tests {
         assert!(norm(&r) < 1e-6 * norm(&b), "relative residual {}", norm(&r) / norm(&b));
     }
 
-    /// A matrix PETSc refuses (a column beyond its size) is a typed error naming PETSc's
-    /// complaint, not a crash or a message on stderr.
+    /// A malformed matrix (a column beyond its size, PETSc would read past the vector) is a
+    /// typed error naming the row, not a crash.
     #[test]
-    fn a_refused_matrix_is_a_typed_error() {
-        let error = Gamg::new(&[0, 1], &[5], &[1.0], 1, &[vec![1.0]])
+    fn a_malformed_matrix_is_a_typed_error() {
+        let error = Gamg::new(vec![0, 1], vec![5], vec![1.0], 1, &[vec![1.0]])
             .err()
             .expect("refused");
         match error {
             Error::Factorization {
                 stage: FactorStage::Multigrid,
                 detail,
-            } => assert!(detail.contains("Column too large"), "{detail}"),
+            } => assert!(detail.contains("row 0 has columns [5]"), "{detail}"),
             other => panic!("{other}"),
         }
+        let unsorted = Gamg::new(vec![0, 2, 3], vec![1, 0, 1], vec![1.0; 3], 1, &[vec![1.0; 2]]);
+        assert!(unsorted.is_err());
+        let ragged = Gamg::new(vec![0, 1, 2], vec![0, 1], vec![1.0; 2], 3, &[vec![1.0; 2]]);
+        assert!(ragged.is_err());
     }
 }
