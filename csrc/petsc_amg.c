@@ -119,6 +119,26 @@ static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, Pe
   PetscCall(PCSetType(pc, PCGAMG));
   PetscCall(KSPSetFromOptions(amg->ksp));
   PetscCall(KSPSetUp(amg->ksp));
+  /* The finest level's smoothing is the caller's (the ILU(0) sweeps of Ã around this
+   * correction): its own would cost most of a V-cycle (four products with the finest matrix
+   * for Chebyshev(2) before and after) for what the sweeps already do. -tc_amg_fine_smooth_its
+   * gives it back. */
+  {
+    PetscInt  levels, its = 0;
+    PetscBool set;
+    KSP       finest;
+    PetscCall(PetscOptionsGetInt(NULL, "tc_", "-amg_fine_smooth_its", &its, &set));
+    PetscCall(PCMGGetLevels(pc, &levels));
+    if (levels > 1 && its >= 0) {
+      PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
+      if (!set || its == 0) {
+        PetscCall(KSPSetType(finest, KSPRICHARDSON));
+        PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, 0));
+      } else {
+        PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, its));
+      }
+    }
+  }
   PetscFunctionReturn(0);
 }
 

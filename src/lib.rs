@@ -23,7 +23,9 @@
 //! paths carry it: the direct one factors the matrix once and condenses each step onto Γ_C
 //! ([`solver::system::StepSystem`], [`solver::fast`]); the iterative one solves each step on all
 //! unknowns by Newton iterations with GMRES + ILU(0) ([`solver::newton_krylov`]), memory linear
-//! in the unknowns (`solver.linear`).
+//! in the unknowns (`solver.linear`); where the stiffness weighs, an AMG coarse correction of
+//! the velocities ([`solver::amg`], PETSc's GAMG behind the cargo feature `petsc`) keeps its
+//! Krylov iterations bounded (`solver.preconditioner`).
 //!
 //! ## Glossary (paper symbol → identifier)
 //!
@@ -41,6 +43,7 @@
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
 //! | A, S = J A | `CsrMatrix` (A), `StepMatrix::matrix` (S) | the step matrix, and its symmetric quasi-definite form (temperature rows negated) |
 //! | Ã | the Newton matrix of [`solver::newton_krylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
+//! | A_ww, B⁻¹ | `VelocityAmg` | the velocity block of A, and one AMG V-cycle on it ([`solver::amg`]) |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of docs/model.md |
 //!
 //! ## Module map

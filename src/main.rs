@@ -732,7 +732,15 @@ fn print_summary(s: &Summary) {
     println!("{:<34} {:>12}", "inner iterations (Uzawa / sweeps)", s.inner_iterations);
     println!("{:<34} {:>12}", "semismooth Newton iterations", s.newton_iterations);
     if s.linear == "iterative" {
-        println!("{:<34} {:>12}", "Krylov iterations (GMRES)", s.krylov_iterations);
+        let per_solve = s.krylov_iterations as f64 / s.linear_solves.max(1) as f64;
+        println!(
+            "{:<34} {:>12}",
+            format!(
+                "Krylov iterations ({}, per solve)",
+                s.preconditioner.as_deref().unwrap_or("ilu")
+            ),
+            format!("{} ({per_solve:.1})", s.krylov_iterations)
+        );
     } else {
         println!("{:<34} {:>12}", "steps through convexification", s.fallback_steps);
     }

@@ -19,6 +19,7 @@ use serde::Serialize;
 use crate::error::Error;
 use crate::problem::Problem;
 use crate::solver::fast::FastSolver;
+use crate::solver::krylov::PreconditionerKind;
 use crate::solver::matrix::StepMatrix;
 use crate::solver::newton::NewtonParams;
 use crate::solver::newton_krylov::{KrylovSystem, NewtonKrylov};
@@ -225,6 +226,15 @@ impl<'a> StepSolver<'a> {
         match self.system() {
             SystemRef::Direct(system) => system.factor_nnz(),
             SystemRef::Iterative(system) => system.factor_nnz(),
+        }
+    }
+
+    /// The iterative path's preconditioner as set up (`auto` resolved; `None` on the direct
+    /// path).
+    pub fn preconditioner(&self) -> Option<PreconditionerKind> {
+        match self.system() {
+            SystemRef::Direct(_) => None,
+            SystemRef::Iterative(system) => Some(system.preconditioner()),
         }
     }
 

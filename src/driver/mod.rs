@@ -41,6 +41,7 @@ use crate::output::checkpoint::{self, Checkpoint, CheckpointError, Identity};
 use crate::output::folder::{Existing, RunFolder};
 use crate::output::{self, fields, Compression, Field, Grid, PvdEntry};
 use crate::problem::Problem;
+use crate::solver::krylov::PreconditionerKind;
 use crate::solver::system::State;
 use crate::solver::{LinearKind, SolverKind, SolverParams, StepInfo};
 use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolver, Stopped};
@@ -157,6 +158,8 @@ struct Setup<'a> {
     factor_nnz: usize,
     /// The linear path taken.
     linear: LinearKind,
+    /// The iterative path's preconditioner as set up.
+    preconditioner: Option<PreconditionerKind>,
 }
 
 impl Setup<'_> {
@@ -183,8 +186,7 @@ impl Setup<'_> {
             descent_sweeps: tally.descent_sweeps,
             krylov_iterations: tally.krylov_iterations,
             linear: self.linear.name().to_string(),
-            preconditioner: (self.linear == LinearKind::Iterative)
-                .then(|| self.params.krylov.preconditioner.name().to_string()),
+            preconditioner: self.preconditioner.map(|p| p.name().to_string()),
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
@@ -326,6 +328,7 @@ pub fn run_observed(
         plan,
         factor_nnz: levels.first().factor_nnz(),
         linear: levels.first().linear(),
+        preconditioner: levels.first().preconditioner(),
     };
     let count_work = |tally: &mut Tally| {
         let stats = levels.step_stats();

@@ -63,6 +63,9 @@ struct Scratch {
 }
 
 impl VelocityAmg {
+    /// Whether this build has the AMG (the cargo feature `petsc`).
+    pub const AVAILABLE: bool = cfg!(feature = "petsc");
+
     /// The AMG of the velocity block of `a` (the step matrix, row i the unknown `order[i]`).
     pub fn new(problem: &Problem, a: &CsrMatrix, order: &[usize]) -> Result<Self, Error> {
         let d = problem.dim();

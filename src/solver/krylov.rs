@@ -6,7 +6,8 @@
 //! pivoting. Why this pair and when it pays (the study that chose it): docs/krylov-study.md. In
 //! short: at the paper's time step (k = 1/64) the mass term dominates and GMRES + ILU(0) needs
 //! 5–7 iterations at 10⁵–10⁶ unknowns; the iteration count grows with k (≈ 20 at k = 1/8), where
-//! an AMG-preconditioned velocity block would keep it bounded.
+//! the AMG coarse correction of [`super::amg`] keeps it bounded ([`Preconditioner`] is what
+//! GMRES sees of either).
 //!
 //! The iterative path's step solver ([`super::newton_krylov`]) uses [`gmres`] and [`Ilu0`]
 //! directly: its matrix changes in the contact rows at every Newton iteration, and
@@ -44,14 +45,29 @@ pub enum PreconditionerKind {
     /// ILU(0) sweeps around a smoothed-aggregation AMG correction of the velocities (PETSc's
     /// GAMG; builds with the `petsc` feature): bounded iterations where the stiffness weighs.
     Amg,
+    /// [`PreconditionerKind::Amg`] where the build has it and ILU(0) needs more than
+    /// [`PreconditionerKind::AUTO_AMG_ABOVE`] Krylov iterations for the first step's system,
+    /// [`PreconditionerKind::Ilu`] otherwise ([`super::newton_krylov::KrylovSystem::new`]).
+    Auto,
 }
 
 impl PreconditionerKind {
+    /// The ILU(0) Krylov count (first step's system from zero, relative residual 10⁻⁸) above
+    /// which `auto` sets up the AMG. An AMG-preconditioned iteration costs 4–6 ILU(0) ones (two
+    /// sweeps, two products with Ã and PETSc's single-threaded V-cycle), and the warm-started
+    /// Newton solves of a run need fewer iterations than this cold probe, so the AMG pays only
+    /// where ILU(0)'s count is far beyond its own 7–14. Measured on the 3D example at 70k
+    /// unknowns, 4 steps (docs/krylov-study.md, "Since then: the AMG"): at k = 1/8 (probe 19)
+    /// ILU(0) runs the solves in 4.7 s, the AMG in 9.7 s; at k = 1/2 (probe 71) 31.0 s against
+    /// 32.8 s; at k = 1 (probe 146) 36.1 s against 25.0 s.
+    pub const AUTO_AMG_ABOVE: usize = 80;
+
     /// The name in scenarios and summaries.
     pub fn name(&self) -> &'static str {
         match self {
             PreconditionerKind::Ilu => "ilu",
             PreconditionerKind::Amg => "amg",
+            PreconditionerKind::Auto => "auto",
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The iterative path: the step problem solved on all unknowns, without condensation onto Γ_C,
-//! each linearization by GMRES preconditioned with ILU(0) (issue 11).
+//! each linearization by GMRES preconditioned with ILU(0), or with ILU(0) sweeps around an AMG
+//! correction of the velocities where the stiffness weighs ([`super::amg`]) (issue 11).
 //!
 //! **Why not condense.** The direct path reduces a step to Γ_C through the dense compliance
 //! C = E_w A⁻¹ E_wᵀ ℓ ([`super::condensed`]), read from the trailing block of a direct factor.
@@ -154,6 +155,30 @@ fn sweep_order(problem: &Problem) -> (Vec<usize>, [usize; 2], usize) {
     (order, [first, second], first_contact)
 }
 
+/// Whether ILU(0) alone needs more than [`PreconditionerKind::AUTO_AMG_ABOVE`] GMRES iterations
+/// for the first step's system (from the initial state, from zero, to 10⁻⁸): the probe of
+/// `solver.preconditioner = "auto"`, capped there so that it costs at most that many.
+fn ilu_needs_amg(
+    problem: &Problem,
+    rhs: &StepRhs,
+    order: &[usize],
+    (a, ilu): (&CsrMatrix, &Ilu0),
+) -> Result<bool, Error> {
+    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.step_size())?;
+    let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
+    let mut x = vec![0.0; b.len()];
+    let probe = KrylovParams {
+        rtol: 1e-8,
+        max_iterations: PreconditionerKind::AUTO_AMG_ABOVE,
+        ..KrylovParams::default()
+    };
+    match gmres_from_residual(a, ilu, &b, &mut x, &mut Vec::new(), &probe) {
+        Ok(_) => Ok(false),
+        Err(Error::KrylovNotConverged { .. }) => Ok(true),
+        Err(other) => Err(other),
+    }
+}
+
 impl KrylovSystem {
     /// Assembles the step matrix of step size k in the order with the Γ_C tangential
     /// velocities last, as A's rows (no symmetric form, no triplets: [`assemble_by_columns`]),
@@ -209,9 +234,15 @@ impl KrylovSystem {
             })
             .collect();
         let ilu = Ilu0::with_domains(&a, parts)?;
-        let amg = match params.preconditioner {
-            PreconditionerKind::Ilu => None,
-            PreconditionerKind::Amg => Some(VelocityAmg::new(problem, &a, &order)?),
+        let with_amg = match params.preconditioner {
+            PreconditionerKind::Ilu => false,
+            PreconditionerKind::Amg => true,
+            PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
+        };
+        let amg = if with_amg {
+            Some(VelocityAmg::new(problem, &a, &order)?)
+        } else {
+            None
         };
         Ok(KrylovSystem {
             rhs,
@@ -234,6 +265,16 @@ impl KrylovSystem {
     /// Stored entries of A and of its ILU(0) factor (the same pattern).
     pub fn factor_nnz(&self) -> usize {
         self.lock().1.nnz()
+    }
+
+    /// The preconditioner set up: [`PreconditionerKind::Ilu`] or [`PreconditionerKind::Amg`]
+    /// (`auto` resolved).
+    pub fn preconditioner(&self) -> PreconditionerKind {
+        if self.amg.is_some() {
+            PreconditionerKind::Amg
+        } else {
+            PreconditionerKind::Ilu
+        }
     }
 
     /// The AMG coarse correction, if the preconditioner has one.

@@ -65,7 +65,16 @@ fn amg_error(detail: String) -> Error {
     }
 }
 
-/// PETSc initialized for this process (once; the outcome is kept).
+/// Held around every call into PETSc: PETSc is not thread-safe (its options database, logging
+/// and memory bookkeeping are process-global), and two runs in one process (tests, Python
+/// threads) may set up and apply their AMGs at once.
+static PETSC: Mutex<()> = Mutex::new(());
+
+fn petsc_lock() -> std::sync::MutexGuard<'static, ()> {
+    PETSC.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// PETSc initialized for this process (once; the outcome is kept). Called under the lock.
 fn initialized() -> Result<(), Error> {
     static OUTCOME: OnceLock<Result<(), String>> = OnceLock::new();
     OUTCOME
@@ -118,17 +127,18 @@ fn check_csr(row_ptr: &[i32], col: &[i32], val: &[f64], block_size: usize, modes
     Ok(())
 }
 
-/// The handle, used by one thread at a time: PETSc is not thread-safe, and a V-cycle writes
-/// into the handle's work vectors.
+/// The handle, used under [`PETSC`] only (a V-cycle also writes into the handle's work
+/// vectors).
 struct Handle(NonNull<RawAmg>);
 
-// SAFETY: the handle is only used under the Mutex of `Gamg`, one call at a time; PETSc's
+// SAFETY: the handle is only used under the process-wide lock, one call at a time; PETSc's
 // sequential objects have no thread affinity.
 unsafe impl Send for Handle {}
+unsafe impl Sync for Handle {}
 
 /// A GAMG hierarchy of one SPD matrix, applied as one V-cycle.
 pub struct Gamg {
-    handle: Mutex<Handle>,
+    handle: Handle,
     /// The matrix's CSR arrays, which PETSc's matrix uses in place (dropped after the handle).
     _csr: (Vec<i32>, Vec<i32>, Vec<f64>),
     n: usize,
@@ -149,6 +159,7 @@ impl Gamg {
     ) -> Result<Self, Error> {
         let mut row_ptr = row_ptr;
         check_csr(&row_ptr, &col, &val, block_size, modes)?;
+        let _petsc = petsc_lock();
         initialized()?;
         let n = row_ptr.len() - 1;
         // SAFETY: no arguments.
@@ -184,7 +195,7 @@ impl Gamg {
             )
         };
         Ok(Gamg {
-            handle: Mutex::new(Handle(handle)),
+            handle: Handle(handle),
             _csr: (row_ptr, col, val),
             n,
             levels: usize::try_from(levels).unwrap_or(0),
@@ -195,9 +206,9 @@ impl Gamg {
     /// y = B⁻¹ x by one V-cycle.
     pub fn apply(&self, x: &[f64], y: &mut [f64]) -> Result<(), Error> {
         assert!(x.len() == self.n && y.len() == self.n, "vectors of the AMG's size");
-        let handle = self.handle.lock().unwrap_or_else(|e| e.into_inner());
+        let _petsc = petsc_lock();
         // SAFETY: a live handle used by this thread alone (the lock); x and y have n entries.
-        match unsafe { tc_amg_apply(handle.0.as_ptr(), x.as_ptr(), y.as_mut_ptr()) } {
+        match unsafe { tc_amg_apply(self.handle.0.as_ptr(), x.as_ptr(), y.as_mut_ptr()) } {
             0 => Ok(()),
             code => Err(amg_error(last_error(code))),
         }
@@ -216,9 +227,9 @@ impl Gamg {
 
 impl Drop for Gamg {
     fn drop(&mut self) {
-        let handle = self.handle.get_mut().unwrap_or_else(|e| e.into_inner());
+        let _petsc = petsc_lock();
         // SAFETY: the handle is live and dropped once.
-        unsafe { tc_amg_destroy(handle.0.as_ptr()) }
+        unsafe { tc_amg_destroy(self.handle.0.as_ptr()) }
     }
 }
 
