@@ -85,7 +85,7 @@ void tc_amg_destroy(tc_amg *amg)
  * each, one after the other, orthonormal). The matrix uses the caller's arrays in place (no
  * copy: 0.7 GB at 10⁶ unknowns), which must outlive the handle. */
 static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, PetscInt *col, double *val,
-                               int n_modes, const double *modes)
+                               int n_modes, const double *modes, int fine_smooth_its)
 {
   MatNullSpace nsp;
   Vec         *vecs;
@@ -119,31 +119,25 @@ static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, Pe
   PetscCall(PCSetType(pc, PCGAMG));
   PetscCall(KSPSetFromOptions(amg->ksp));
   PetscCall(KSPSetUp(amg->ksp));
-  /* The finest level's smoothing is the caller's (the ILU(0) sweeps of Ã around this
-   * correction): its own would cost most of a V-cycle (four products with the finest matrix
-   * for Chebyshev(2) before and after) for what the sweeps already do. -tc_amg_fine_smooth_its
-   * gives it back. */
+  /* The finest level's smoothing: `fine_smooth_its` steps (0: none, the caller smooths there;
+   * negative: PETSc's default), unless -tc_amg_fine_smooth_its says otherwise. */
   {
-    PetscInt  levels, its = 0;
+    PetscInt  levels, its = fine_smooth_its;
     PetscBool set;
     KSP       finest;
     PetscCall(PetscOptionsGetInt(NULL, "tc_", "-amg_fine_smooth_its", &its, &set));
     PetscCall(PCMGGetLevels(pc, &levels));
     if (levels > 1 && its >= 0) {
       PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
-      if (!set || its == 0) {
-        PetscCall(KSPSetType(finest, KSPRICHARDSON));
-        PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, 0));
-      } else {
-        PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, its));
-      }
+      if (its == 0) PetscCall(KSPSetType(finest, KSPRICHARDSON));
+      PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, its));
     }
   }
   PetscFunctionReturn(0);
 }
 
 int tc_amg_create(int n, int bs, int *row_ptr, int *col, double *val, int n_modes, const double *modes,
-                  tc_amg **out)
+                  int fine_smooth_its, tc_amg **out)
 {
   PetscErrorCode ierr;
   tc_message[0] = '\0';
@@ -160,10 +154,10 @@ int tc_amg_create(int n, int bs, int *row_ptr, int *col, double *val, int n_mode
   if (!ierr) {
     for (int i = 0; i <= n; ++i) amg->row_ptr[i] = row_ptr[i];
     for (int p = 0; p < row_ptr[n]; ++p) amg->col[p] = col[p];
-    ierr = tc_setup(amg, n, bs, amg->row_ptr, amg->col, val, n_modes, modes);
+    ierr = tc_setup(amg, n, bs, amg->row_ptr, amg->col, val, n_modes, modes, fine_smooth_its);
   }
 #else
-  ierr = tc_setup(amg, n, bs, row_ptr, col, val, n_modes, modes);
+  ierr = tc_setup(amg, n, bs, row_ptr, col, val, n_modes, modes, fine_smooth_its);
 #endif
   if (ierr) {
     tc_amg_destroy(amg);

@@ -113,7 +113,8 @@ pub struct KrylovSystem {
     pub(super) base: Vec<f64>,
     /// Ã and its ILU(0), changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, Ilu0)>,
-    /// The AMG coarse correction of the velocities, with `solver.preconditioner = "amg"`.
+    /// The AMG coarse correction of the velocities, where the preconditioner has one (`amg`, or
+    /// `auto` resolved to it).
     amg: Option<VelocityAmg>,
     pub(super) params: KrylovParams,
     stats: Mutex<SystemStats>,
@@ -295,6 +296,13 @@ impl KrylovSystem {
             None => gmres_from_residual(a, ilu, rhs, x, residual, &self.params),
             Some(amg) => gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params),
         }
+    }
+
+    /// The step's right-hand side b (its linear part, without the contact terms) from
+    /// `previous` to time `t`, in the unknowns' numbering: with [`KrylovSystem::solve`], the
+    /// first step's system of studies and tests.
+    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
+        self.rhs.rhs(problem, previous, t)
     }
 
     /// Solves A x = b with the step matrix itself (its Γ_C rows as assembled, no contact

@@ -4,10 +4,11 @@
 //! **Why PETSc, and why a binding of our own.** docs/krylov-study.md measured the candidates on
 //! the velocity block of the 3D step matrix: PETSc's GAMG with the rigid-body modes keeps CG at
 //! 8–16 iterations from 98k to 972k unknowns and from k = 1/256 to 1/8; the pure-Rust `kryst`
-//! 4.3 did not coarsen this matrix with its smoothed aggregation (one level), and its classical
-//! AMG took 32 s to set up at 98k. No maintained pure-Rust AMG worked, so the AMG is PETSc's,
-//! behind a feature so that the default build needs no system library. The binding is the five
-//! functions this crate calls, compiled in C against the installed headers (`build.rs`): a
+//! 4.3's smoothed aggregation did not coarsen this matrix (one level, then out of memory at
+//! 14k rows), and its classical AMG took 32 s to set up for 3 360 rows. No maintained pure-Rust
+//! AMG worked, so the AMG is PETSc's, behind a feature so that the default build needs no
+//! system library. The binding is the eight functions of the C layer, compiled against the
+//! installed headers (`build.rs`): a
 //! generated binding of all of PETSc (`bindgen`, the `petsc-rs` crate) would need libclang at
 //! build time and fix PETSc's configuration-dependent types (PetscInt, MPI_Comm) in Rust.
 //!
@@ -39,6 +40,7 @@ extern "C" {
         val: *mut c_double,
         n_modes: c_int,
         modes: *const c_double,
+        fine_smooth_its: c_int,
         out: *mut *mut RawAmg,
     ) -> c_int;
     fn tc_amg_apply(amg: *mut RawAmg, x: *const c_double, y: *mut c_double) -> c_int;
@@ -136,6 +138,15 @@ struct Handle(NonNull<RawAmg>);
 unsafe impl Send for Handle {}
 unsafe impl Sync for Handle {}
 
+/// The finest level's smoothing in the V-cycle (`-tc_amg_fine_smooth_its N` overrides it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FineSmoothing {
+    /// PETSc's default smoother (Chebyshev with Jacobi).
+    Petsc,
+    /// None: the caller smooths on the finest level (restriction, coarse levels, prolongation).
+    None,
+}
+
 /// A GAMG hierarchy of one SPD matrix, applied as one V-cycle.
 pub struct Gamg {
     handle: Handle,
@@ -149,13 +160,16 @@ pub struct Gamg {
 impl Gamg {
     /// Sets up GAMG on the n × n CSR matrix (`row_ptr`, `col`, `val`; each row's columns
     /// increasing) whose unknowns come in blocks of `block_size` per node, with the
-    /// near-nullspace `modes` (orthonormal, n values each). PETSc works on the arrays in place.
+    /// near-nullspace `modes` (orthonormal, n values each) and `fine_smoothing` on the finest
+    /// level (PETSc's own, or none where the caller smooths there). PETSc works on the arrays in
+    /// place.
     pub fn new(
         row_ptr: Vec<i32>,
         mut col: Vec<i32>,
         mut val: Vec<f64>,
         block_size: usize,
         modes: &[Vec<f64>],
+        fine_smoothing: FineSmoothing,
     ) -> Result<Self, Error> {
         let mut row_ptr = row_ptr;
         check_csr(&row_ptr, &col, &val, block_size, modes)?;
@@ -178,6 +192,10 @@ impl Gamg {
                 val.as_mut_ptr(),
                 modes.len() as c_int,
                 flat.as_ptr(),
+                match fine_smoothing {
+                    FineSmoothing::Petsc => -1,
+                    FineSmoothing::None => 0,
+                },
                 &mut raw,
             )
         };
@@ -238,7 +256,8 @@ mod tests {
     use super::*;
 
     /// GAMG on the 1D Laplacian (plus a small shift) with the constant as near-nullspace: a
-    /// multilevel hierarchy, and stationary iteration with its V-cycle converges fast.
+    /// multilevel hierarchy, and stationary iteration with its V-cycle (PETSc's smoothing on
+    /// every level) converges fast.
     #[test]
     fn gamg_solves_a_laplacian() {
         let n = 2000;
@@ -257,7 +276,15 @@ mod tests {
             row_ptr.push(col.len() as i32);
         }
         let mode = vec![1.0 / (n as f64).sqrt(); n];
-        let amg = Gamg::new(row_ptr.clone(), col.clone(), val.clone(), 1, &[mode]).unwrap();
+        let amg = Gamg::new(
+            row_ptr.clone(),
+            col.clone(),
+            val.clone(),
+            1,
+            &[mode],
+            FineSmoothing::Petsc,
+        )
+        .unwrap();
         assert!(amg.levels() >= 3, "{} levels", amg.levels());
         assert!(amg.operator_complexity() > 1.0 && amg.operator_complexity() < 2.0);
         let a_mul = |x: &[f64]| -> Vec<f64> {
@@ -285,7 +312,7 @@ mod tests {
     /// typed error naming the row, not a crash.
     #[test]
     fn a_malformed_matrix_is_a_typed_error() {
-        let error = Gamg::new(vec![0, 1], vec![5], vec![1.0], 1, &[vec![1.0]])
+        let error = Gamg::new(vec![0, 1], vec![5], vec![1.0], 1, &[vec![1.0]], FineSmoothing::None)
             .err()
             .expect("refused");
         match error {
@@ -295,9 +322,23 @@ mod tests {
             } => assert!(detail.contains("row 0 has columns [5]"), "{detail}"),
             other => panic!("{other}"),
         }
-        let unsorted = Gamg::new(vec![0, 2, 3], vec![1, 0, 1], vec![1.0; 3], 1, &[vec![1.0; 2]]);
+        let unsorted = Gamg::new(
+            vec![0, 2, 3],
+            vec![1, 0, 1],
+            vec![1.0; 3],
+            1,
+            &[vec![1.0; 2]],
+            FineSmoothing::None,
+        );
         assert!(unsorted.is_err());
-        let ragged = Gamg::new(vec![0, 1, 2], vec![0, 1], vec![1.0; 2], 3, &[vec![1.0; 2]]);
+        let ragged = Gamg::new(
+            vec![0, 1, 2],
+            vec![0, 1],
+            vec![1.0; 2],
+            3,
+            &[vec![1.0; 2]],
+            FineSmoothing::None,
+        );
         assert!(ragged.is_err());
     }
 }
