@@ -769,6 +769,13 @@ fn print_summary(s: &Summary) {
             _ => "ILU(0) preconditioner",
         };
         println!("{:<34} {:>10.3} s", label, t.factorization);
+        if let Some(amg) = s.amg {
+            println!(
+                "{:<34} {:>12}",
+                "  AMG levels (operator complexity)",
+                format!("{} ({:.2})", amg.levels, amg.operator_complexity)
+            );
+        }
     } else {
         println!("{:<34} {:>10.3} s", "factorization", t.factorization);
         println!("{:<34} {:>10.3} s", "solver set-up (condensation)", t.solver_setup);

@@ -18,6 +18,7 @@ use serde::Serialize;
 
 use crate::error::Error;
 use crate::problem::Problem;
+use crate::solver::amg::VelocityAmg;
 use crate::solver::fast::FastSolver;
 use crate::solver::krylov::PreconditionerKind;
 use crate::solver::matrix::StepMatrix;
@@ -235,6 +236,14 @@ impl<'a> StepSolver<'a> {
         match self.system() {
             SystemRef::Direct(_) => None,
             SystemRef::Iterative(system) => Some(system.preconditioner()),
+        }
+    }
+
+    /// The AMG coarse correction of the iterative path, where its preconditioner has one.
+    pub fn amg(&self) -> Option<&VelocityAmg> {
+        match self.system() {
+            SystemRef::Direct(_) => None,
+            SystemRef::Iterative(system) => system.amg(),
         }
     }
 

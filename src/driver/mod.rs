@@ -49,7 +49,9 @@ use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolv
 pub use stop::StopFlag;
 use writer::FrameWriter;
 
-pub use summary::{CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings};
+pub use summary::{
+    AmgRecord, CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings,
+};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -160,6 +162,7 @@ struct Setup<'a> {
     linear: LinearKind,
     /// The iterative path's preconditioner as set up.
     preconditioner: Option<PreconditionerKind>,
+    amg: Option<AmgRecord>,
 }
 
 impl Setup<'_> {
@@ -187,6 +190,7 @@ impl Setup<'_> {
             krylov_iterations: tally.krylov_iterations,
             linear: self.linear.name().to_string(),
             preconditioner: self.preconditioner.map(|p| p.name().to_string()),
+            amg: self.amg,
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
@@ -329,6 +333,10 @@ pub fn run_observed(
         factor_nnz: levels.first().factor_nnz(),
         linear: levels.first().linear(),
         preconditioner: levels.first().preconditioner(),
+        amg: levels.first().amg().map(|amg| AmgRecord {
+            levels: amg.levels(),
+            operator_complexity: amg.operator_complexity(),
+        }),
     };
     let count_work = |tally: &mut Tally| {
         let stats = levels.step_stats();

@@ -109,6 +109,9 @@ pub struct Summary {
     /// the direct path).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preconditioner: Option<String>,
+    /// The AMG hierarchy, where the preconditioner has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amg: Option<AmgRecord>,
     /// Krylov iterations over all linear solves (iterative path; 0 on the direct path).
     pub krylov_iterations: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
@@ -156,6 +159,14 @@ impl RunStatus {
             Some(_) => RunStatus::Failed,
         }
     }
+}
+
+/// The AMG hierarchy of the velocity block (`solver.preconditioner`), as PETSc's GAMG built it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AmgRecord {
+    pub levels: usize,
+    /// Stored entries of all levels' matrices over the finest level's.
+    pub operator_complexity: f64,
 }
 
 /// A step that went through substeps.
