@@ -175,10 +175,7 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
             r.wall,
         ));
     }
-    let mut paths: Vec<String> = rows.iter().map(ScaleRow::path).collect();
-    paths.dedup();
-    paths.sort();
-    paths.dedup();
+    let paths: std::collections::BTreeSet<String> = rows.iter().map(ScaleRow::path).collect();
     for linear in paths {
         let same: Vec<&ScaleRow> = rows
             .iter()

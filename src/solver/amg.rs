@@ -33,6 +33,7 @@
 
 use std::sync::Mutex;
 
+use super::condensed::dot;
 use super::krylov::{CsrMatrix, Ilu0, Preconditioner};
 use crate::error::Error;
 use crate::problem::Problem;
@@ -69,17 +70,9 @@ impl VelocityAmg {
     /// The AMG of the velocity block of `a` (the step matrix, row i the unknown `order[i]`).
     pub fn new(problem: &Problem, a: &CsrMatrix, order: &[usize]) -> Result<Self, Error> {
         let d = problem.dim();
-        let velocity = &problem.velocity;
-        let n_w = velocity.n_free;
-        let n_nodes = problem.mesh.n_nodes();
-        let n_padded = d * n_nodes;
-        // Every velocity unknown is one of its node's d slots.
-        let mut padded = vec![0u32; n_w];
-        for p in 0..n_nodes {
-            for (k, u) in velocity.node_unknowns(p).enumerate() {
-                padded[u] = index32(d * p + k)?;
-            }
-        }
+        let n_w = problem.velocity.n_free;
+        let n_padded = d * problem.mesh.n_nodes();
+        let padded = padded_slots(problem)?;
         let rows: Vec<(u32, u32)> = (order.iter().enumerate())
             .filter(|&(_, &u)| u < n_w)
             .map(|(i, &u)| Ok((index32(i)?, padded[u])))
@@ -87,11 +80,7 @@ impl VelocityAmg {
         let mut row_of = vec![None; n_padded];
         rows.iter().for_each(|&(i, q)| row_of[q as usize] = Some(i as usize));
 
-        let diagonal = |i: usize| {
-            let (cols, vals) = a.row(i);
-            cols.binary_search(&(i as u32)).map_or(0.0, |p| vals[p])
-        };
-        let mean_diagonal = rows.iter().map(|&(i, _)| diagonal(i as usize)).sum::<f64>() / rows.len().max(1) as f64;
+        let mean_diagonal = rows.iter().map(|&(i, _)| a.diagonal(i as usize)).sum::<f64>() / rows.len().max(1) as f64;
         let (mut row_ptr, mut col, mut val) = (Vec::with_capacity(n_padded + 1), Vec::new(), Vec::new());
         row_ptr.push(0i32);
         let mut entries: Vec<(u32, f64)> = Vec::new();
@@ -184,6 +173,18 @@ fn residual_of(a: &CsrMatrix, r: &[f64], z: &[f64], out: &mut [f64]) {
     out.iter_mut().zip(r).for_each(|(o, r)| *o = r - *o);
 }
 
+/// The slot of each velocity unknown in the padded numbering: node p's k-th unknown is d p + k.
+fn padded_slots(problem: &Problem) -> Result<Vec<u32>, Error> {
+    let d = problem.dim();
+    let mut padded = vec![0u32; problem.velocity.n_free];
+    for p in 0..problem.mesh.n_nodes() {
+        for (k, u) in problem.velocity.node_unknowns(p).enumerate() {
+            padded[u] = index32(d * p + k)?;
+        }
+    }
+    Ok(padded)
+}
+
 /// The rigid-body modes of the velocity field (d translations, d(d−1)/2 rotations about the
 /// nodes' centroid) in the padded numbering of the nodes' frames (Pᵀ r, zero in the held
 /// slots), orthonormalized; a mode the constraints remove entirely is dropped.
@@ -227,7 +228,6 @@ fn rigid_body_modes(problem: &Problem, padded: &[u32]) -> Vec<Vec<f64>> {
 
 /// Modified Gram–Schmidt, twice; vectors that vanish against the earlier ones are dropped.
 fn orthonormalize(vectors: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(vectors.len());
     for mut v in vectors {
         let original = dot(&v, &v).sqrt();
@@ -305,7 +305,6 @@ mod tests {
     fn orthonormalize_drops_dependent_vectors() {
         let v = orthonormalize(vec![vec![1.0, 1.0, 0.0], vec![2.0, 2.0, 0.0], vec![0.0, 1.0, 1.0]]);
         assert_eq!(v.len(), 2);
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
         assert!((dot(&v[0], &v[0]) - 1.0).abs() < 1e-14 && (dot(&v[1], &v[1]) - 1.0).abs() < 1e-14);
         assert!(dot(&v[0], &v[1]).abs() < 1e-14);
     }
@@ -317,16 +316,8 @@ mod tests {
         let sets = ["mesh.nx=4".into(), "mesh.ny=2".into(), "mesh.nz=2".into()];
         let text = include_str!("../../scenarios/paper3d.toml");
         let problem = crate::Scenario::load(Some(text), &sets).unwrap().build().unwrap();
-        let d = problem.dim();
-        let mut padded = vec![0u32; problem.velocity.n_free];
-        for p in 0..problem.mesh.n_nodes() {
-            for (k, u) in problem.velocity.node_unknowns(p).enumerate() {
-                padded[u] = (d * p + k) as u32;
-            }
-        }
-        let modes = rigid_body_modes(&problem, &padded);
+        let modes = rigid_body_modes(&problem, &padded_slots(&problem).unwrap());
         assert_eq!(modes.len(), 6);
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<f64>();
         for (i, a) in modes.iter().enumerate() {
             for (j, b) in modes.iter().enumerate() {
                 let expected = if i == j { 1.0 } else { 0.0 };

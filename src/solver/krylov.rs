@@ -213,6 +213,12 @@ impl CsrMatrix {
         (&self.col[range.clone()], &self.val[range])
     }
 
+    /// The diagonal entry A_ii (0 where the pattern has none).
+    pub fn diagonal(&self, i: usize) -> f64 {
+        let (cols, vals) = self.row(i);
+        cols.binary_search(&index32(i)).map_or(0.0, |p| vals[p])
+    }
+
     /// Row i's values, to change them in place (the pattern stays).
     pub fn row_values_mut(&mut self, i: usize) -> &mut [f64] {
         &mut self.val[self.ptr[i]..self.ptr[i + 1]]

@@ -211,17 +211,13 @@ impl KrylovSystem {
         });
         let a = CsrMatrix::from_rows(n, ptr, col, val);
         let base = a.values_from(first_contact).to_vec();
-        let diagonal = |row: usize| {
-            let (cols, vals) = a.row(row);
-            cols.binary_search(&(row as u32)).map_or(0.0, |p| vals[p])
-        };
         let nodes = (problem.contact.iter())
             .map(|node| {
                 let tangent: Vec<(usize, usize)> = (node.tangent_dofs.iter().enumerate())
                     .filter_map(|(k, dof)| dof.map(|r| (k, position[r])))
                     .collect();
                 let stiffness =
-                    tangent.iter().map(|&(_, row)| diagonal(row)).sum::<f64>() / tangent.len().max(1) as f64;
+                    tangent.iter().map(|&(_, row)| a.diagonal(row)).sum::<f64>() / tangent.len().max(1) as f64;
                 NodeRows {
                     tangent,
                     theta: node.theta_dof.map(|r| position[n_w + r]),
