@@ -187,46 +187,30 @@ fn krylov_iterations_stay_bounded_under_refinement() {
 #[test]
 fn auto_picks_the_path_by_size_and_memory() {
     use thermocontact::solver::{LinearKind, SolverKind};
-    let auto = LinearKind::Auto;
+    use LinearKind::{Auto, Direct, Iterative};
+    use SolverKind::{Fast, Paper};
     let gib = (1u64 << 30) as f64;
-    assert_eq!(
-        auto.resolve(2, 10_000_000, SolverKind::Fast, 24.0 * gib),
-        LinearKind::Direct
-    );
-    assert_eq!(
-        auto.resolve(3, 46_970, SolverKind::Fast, 24.0 * gib),
-        LinearKind::Direct
-    );
-    assert_eq!(
-        auto.resolve(3, 98_334, SolverKind::Fast, 24.0 * gib),
-        LinearKind::Iterative
-    );
-    assert_eq!(
-        auto.resolve(3, 46_970, SolverKind::Fast, 0.5 * gib),
-        LinearKind::Iterative
-    );
-    assert_eq!(
-        auto.resolve(3, 972_270, SolverKind::Fast, 24.0 * gib),
-        LinearKind::Iterative
-    );
-    assert_eq!(
-        auto.resolve(3, 98_334, SolverKind::Fast, 2.0 * gib),
-        LinearKind::Iterative
-    );
-    // The paper's solver pays a Krylov solve per Uzawa iterate on the iterative path: direct
-    // wherever the factor fits, iterative beyond.
-    assert_eq!(
-        auto.resolve(3, 98_334, SolverKind::Paper, 24.0 * gib),
-        LinearKind::Direct
-    );
-    assert_eq!(
-        auto.resolve(3, 972_270, SolverKind::Paper, 24.0 * gib),
-        LinearKind::Iterative
-    );
-    assert_eq!(
-        LinearKind::Direct.resolve(3, 972_270, SolverKind::Fast, 24.0 * gib),
-        LinearKind::Direct
-    );
+    // (requested, dimension, unknowns, solver, machine memory in GiB) → path.
+    let cases = [
+        (Auto, 2, 10_000_000, Fast, 24.0, Direct),
+        (Auto, 3, 46_970, Fast, 24.0, Direct),
+        (Auto, 3, 98_334, Fast, 24.0, Iterative),
+        (Auto, 3, 46_970, Fast, 0.5, Iterative),
+        (Auto, 3, 972_270, Fast, 24.0, Iterative),
+        (Auto, 3, 98_334, Fast, 2.0, Iterative),
+        // The paper's solver pays a Krylov solve per Uzawa iterate on the iterative path:
+        // direct wherever the factor fits, iterative beyond.
+        (Auto, 3, 98_334, Paper, 24.0, Direct),
+        (Auto, 3, 972_270, Paper, 24.0, Iterative),
+        (Direct, 3, 972_270, Fast, 24.0, Direct),
+    ];
+    for (requested, dim, unknowns, kind, memory, expected) in cases {
+        assert_eq!(
+            requested.resolve(dim, unknowns, kind, memory * gib),
+            expected,
+            "{requested:?} in {dim}D, {unknowns} unknowns, {kind:?}, {memory} GiB"
+        );
+    }
     let error = Scenario::load(None, &["solver.linear=cg".into()])
         .unwrap_err()
         .to_string();

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use common::coarse;
 use thermocontact::driver::{self, OutputPlan, Restart, RunOptions, RunStatus, StopFlag, CHECKPOINT_FILE};
+use thermocontact::solver::SolverParams;
 use thermocontact::{Error, Interruption, Scenario};
 
 fn scratch(tag: &str) -> PathBuf {
@@ -31,6 +32,15 @@ fn pvd_files(dir: &Path) -> Vec<String> {
         .skip(1)
         .map(|rest| rest.split('"').next().unwrap().to_string())
         .collect()
+}
+
+/// No half-written file (`*.tmp-*`, `output::write_atomic`'s) is left in `dir`.
+fn assert_no_temporary_files(dir: &Path) {
+    let temporary: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(temporary.is_empty(), "{temporary:?}");
 }
 
 fn vtu_files(dir: &Path) -> Vec<String> {
@@ -62,12 +72,19 @@ fn scenario() -> Scenario {
     coarse(&["output.times=[0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0]"])
 }
 
+/// A scenario's problem, solver settings and output plan: what `driver::run` takes.
+fn parts(scenario: &Scenario) -> (thermocontact::Problem, SolverParams, OutputPlan) {
+    (
+        scenario.build().unwrap(),
+        scenario.solver_params(),
+        scenario.output_plan(),
+    )
+}
+
 #[test]
 fn a_folder_with_another_runs_results_is_refused_unless_overwritten() {
     let dir = scratch("refuse");
-    let scenario = coarse(&["time.steps=4", "output.times=[0.5, 1.0]"]);
-    let problem = scenario.build().unwrap();
-    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let (problem, params, plan) = parts(&coarse(&["time.steps=4", "output.times=[0.5, 1.0]"]));
     let first = driver::run(&problem, &params, &plan, &options(&dir)).unwrap();
     std::fs::write(dir.join("notes.txt"), "mine").unwrap();
 
@@ -100,9 +117,7 @@ fn a_folder_with_another_runs_results_is_refused_unless_overwritten() {
 
 #[test]
 fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted_run() {
-    let scenario = scenario();
-    let problem = scenario.build().unwrap();
-    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let (problem, params, plan) = parts(&scenario());
 
     let whole = scratch("whole");
     let reference = driver::run(&problem, &params, &plan, &options(&whole)).unwrap();
@@ -145,11 +160,7 @@ fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted
     );
     assert_eq!(pvd_files(&dir), vtu_files(&dir));
     same_bytes(&whole, &dir, &["solution_0002.vtu".into(), "solution_0004.vtu".into()]);
-    let temporary: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
-        .collect();
-    assert!(temporary.is_empty(), "{temporary:?}");
+    assert_no_temporary_files(&dir);
 
     // Continued from the checkpoint of step 5: every frame and the final fields bit for bit.
     let restart = Restart::read(&dir.join(CHECKPOINT_FILE)).unwrap();
@@ -404,9 +415,8 @@ fn a_failed_run_continued_to_the_end_leaves_no_checkpoint() {
 #[test]
 fn initial_fields_come_from_a_checkpoint_of_the_same_mesh() {
     let dir = scratch("initial-from");
-    let scenario = scenario();
-    let problem = scenario.build().unwrap();
-    let checkpoint = whole_checkpoint(&problem, &scenario.output_plan(), &dir);
+    let (problem, _, plan) = parts(&scenario());
+    let checkpoint = whole_checkpoint(&problem, &plan, &dir);
     let state = Restart::read(&checkpoint).unwrap().checkpoint.state;
     assert_eq!(state.n, 3);
     assert!(state.u.iter().any(|&u| u != 0.0));
@@ -515,9 +525,7 @@ fn files_ending(dir: &Path, suffix: &str) -> Vec<String> {
 /// waits) and checkpoints in between (the loop waits for the frames before each).
 #[test]
 fn frames_from_the_writer_thread_are_the_bytes_of_inline_frames() {
-    let scenario = coarse(&["output.every=1", "output.checkpoint_every=5"]);
-    let problem = scenario.build().unwrap();
-    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let (problem, params, plan) = parts(&coarse(&["output.every=1", "output.checkpoint_every=5"]));
     let (threaded, inline) = (scratch("threaded"), scratch("inline"));
     let a = driver::run(&problem, &params, &plan, &options(&threaded)).unwrap();
     let inline_options = RunOptions {
@@ -557,9 +565,7 @@ fn frames_from_the_writer_thread_are_the_bytes_of_inline_frames() {
 /// is kept as a checkpoint and a frame.
 #[test]
 fn an_io_error_of_a_frame_stops_the_run_and_leaves_a_consistent_folder() {
-    let scenario = scenario();
-    let problem = scenario.build().unwrap();
-    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let (problem, params, plan) = parts(&scenario());
     let whole = scratch("io-whole");
     driver::run(&problem, &params, &plan, &options(&whole)).unwrap();
     for inline_frames in [false, true] {
@@ -616,11 +622,7 @@ fn an_io_error_of_a_frame_stops_the_run_and_leaves_a_consistent_folder() {
             assert_eq!(vtu_arrays(&dir.join(name)).len(), 7, "{name} is whole");
         }
         same_bytes(&whole, &dir, &expected[..2]);
-        let temporary: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
-            .collect();
-        assert!(temporary.is_empty(), "{temporary:?}");
+        assert_no_temporary_files(&dir);
         let restart = Restart::read(&dir.join(CHECKPOINT_FILE)).unwrap();
         assert_eq!(restart.checkpoint.state.n, last);
         assert_eq!(
