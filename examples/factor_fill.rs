@@ -24,8 +24,8 @@ use std::time::Instant;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymmetricOrdering};
 use faer::sparse::SymbolicSparseColMat;
 use faer::Side;
-use thermocontact::fem::sparse::NodeGraph;
-use thermocontact::solver::system::StepSystem;
+use thermocontact::la::NodeGraph;
+use thermocontact::step::direct::StepSystem;
 use thermocontact::{Problem, Scenario};
 
 fn main() -> anyhow::Result<()> {

@@ -29,8 +29,8 @@ use thermocontact::driver::{self, OutputPlan, RunOptions, Summary};
 use thermocontact::loads::Datum;
 use thermocontact::material::{Isotropic, Material};
 use thermocontact::mesh;
-use thermocontact::problem::{LoadTarget, ProblemBuilder, TimeGrid};
-use thermocontact::solver::SolverParams;
+use thermocontact::model::{LoadTarget, ProblemBuilder, TimeGrid};
+use thermocontact::step::SolverParams;
 
 /// The ring and its loading.
 struct Ring {

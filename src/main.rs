@@ -16,10 +16,10 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use thermocontact::driver::{self, RunOptions, StopFlag, Summary};
-use thermocontact::reproduction::study::{self, StudyPlan};
-use thermocontact::reproduction::{self as repro, FigureOptions, FiguresMade};
+use thermocontact::studies::reproduction::study::{self, StudyPlan};
+use thermocontact::studies::reproduction::{self as repro, FigureOptions, FiguresMade};
 use thermocontact::scenario::{Scenario, DEFAULT_TOML};
-use thermocontact::verification::{self, study::LevelRun};
+use thermocontact::studies::verification::{self, study::LevelRun};
 use thermocontact::Interruption;
 
 /// Dynamic frictional contact of thermo-viscoelastic bodies with nonmonotone (slip-weakening)
@@ -481,7 +481,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
 }
 
 fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usize) -> anyhow::Result<()> {
-    use thermocontact::bench::{format_table, loglog_slope, measure, write_results};
+    use thermocontact::studies::bench::{format_table, loglog_slope, measure, write_results};
     let exe = std::env::current_exe()?;
     std::fs::create_dir_all(out)?;
     println!("reference discretization of the paper: nx = 256, ny = 64, k = 1/{steps}");
@@ -505,8 +505,8 @@ fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usiz
     }
     println!("scaling (ny = nx/4, {steps} steps):\n{}", format_table(&scaling));
     let fast: Vec<_> = scaling.iter().filter(|r| r.solver == "fast").collect();
-    let work = |r: &&thermocontact::bench::BenchRow| (r.unknowns * r.steps) as f64;
-    let fit = |f: &dyn Fn(&thermocontact::bench::BenchRow) -> f64| {
+    let work = |r: &&thermocontact::studies::bench::BenchRow| (r.unknowns * r.steps) as f64;
+    let fit = |f: &dyn Fn(&thermocontact::studies::bench::BenchRow) -> f64| {
         loglog_slope(&fast.iter().map(|r| (work(r), f(r))).collect::<Vec<_>>())
     };
     if let (Some(total), Some(stepping), Some(memory)) = (
@@ -529,7 +529,7 @@ fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usiz
 
 /// `bench --hard`: every hard case in a child process, then the table.
 fn bench_hard(out: &std::path::Path) -> anyhow::Result<()> {
-    use thermocontact::bench::{format_hard_table, hard_cases, run_hard};
+    use thermocontact::studies::bench::{format_hard_table, hard_cases, run_hard};
     let exe = std::env::current_exe()?;
     std::fs::create_dir_all(out)?;
     let mut rows = Vec::new();
@@ -559,7 +559,7 @@ struct Suite3d {
 /// `bench --3d`: the 3D example at growing sizes on both linear paths, then one size at
 /// k = 1/8.
 fn bench_3d(out: &std::path::Path, suite: &Suite3d) -> anyhow::Result<()> {
-    use thermocontact::bench::scale::{format_scale_table, measure_3d};
+    use thermocontact::studies::bench::scale::{format_scale_table, measure_3d};
     let exe = std::env::current_exe()?;
     let scenario = std::path::Path::new("scenarios/paper3d.toml");
     anyhow::ensure!(

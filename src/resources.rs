@@ -7,10 +7,10 @@
 //! 1 300 at 47k and 2 416 at 291k, i.e. about 1 300 (N / 47 000)^{1/3}. A run's peak is about
 //! 18–28 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).
 //! The estimate is for refusing runs that cannot fit, not a promise: within 1.5× of the
-//! measured peaks. The iterative path ([`crate::solver::newton_krylov`]) has no fill: its
+//! measured peaks. The iterative path ([`crate::step::newton_krylov`]) has no fill: its
 //! memory is linear in the unknowns.
 
-use crate::solver::LinearKind;
+use crate::step::LinearKind;
 
 /// Bytes of peak memory per factor entry (measured: 164 MiB for 6.2 M entries in 2D, 28 bytes;
 /// 1.05 GB for 61 M in 3D with cutback levels, 18 bytes).

@@ -4,14 +4,16 @@
 //! direct path's solution (`tests/newton_krylov.rs`).
 #![cfg(feature = "petsc")]
 
-use thermocontact::solver::krylov::{KrylovParams, PreconditionerKind, SolveInfo};
-use thermocontact::solver::newton_krylov::KrylovSystem;
-use thermocontact::solver::system::{State, StepSystem};
+use thermocontact::la::SolveInfo;
+use thermocontact::step::{KrylovParams, PreconditionerKind};
+use thermocontact::step::iterative::KrylovSystem;
+use thermocontact::model::State;
+use thermocontact::step::direct::StepSystem;
 use thermocontact::Scenario;
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
 
-fn problem(nx: usize, steps: usize) -> thermocontact::problem::Problem {
+fn problem(nx: usize, steps: usize) -> thermocontact::model::Problem {
     let ny = nx / 4;
     let sets: Vec<String> = vec![
         format!("mesh.nx={nx}"),
@@ -32,7 +34,7 @@ fn params(preconditioner: PreconditionerKind) -> KrylovParams {
 
 /// GMRES from zero on the first step's right-hand side with the step matrix of step size k.
 fn first_step_solve(
-    problem: &thermocontact::problem::Problem,
+    problem: &thermocontact::model::Problem,
     preconditioner: PreconditionerKind,
 ) -> (Vec<f64>, SolveInfo) {
     let k = problem.time_step();

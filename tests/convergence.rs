@@ -10,9 +10,10 @@
 
 use std::process::Command;
 
-use thermocontact::time::{self, contact_rows};
-use thermocontact::verification::manufactured::Manufactured;
-use thermocontact::verification::study::{self, LevelRun, StudyReport};
+use thermocontact::model::contact_rows;
+use thermocontact::time;
+use thermocontact::studies::verification::manufactured::Manufactured;
+use thermocontact::studies::verification::study::{self, LevelRun, StudyReport};
 use thermocontact::Scenario;
 
 fn quiet(_: &LevelRun) {}
@@ -92,7 +93,7 @@ fn manufactured_contact_has_the_exact_stick_and_slip_zones() {
         .unwrap();
     let tolerance = scenario.solver.slip_tolerance;
     let (mut stick, mut slip) = (0, 0);
-    time::run(&problem, &scenario.solver_params(), |state, _| {
+    time::run::<time::TimeError>(&problem, &scenario.solver_params(), |state, _| {
         if state.n == 4 {
             let t = 0.5;
             for row in contact_rows(&problem, state, tolerance) {

@@ -6,10 +6,10 @@ mod common;
 use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
 use thermocontact::loads::Datum;
 use thermocontact::mesh::{self, Mesh};
-use thermocontact::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
-use thermocontact::solver::system::State;
-use thermocontact::solver::{SolverKind, SolverParams};
-use thermocontact::time::contact_rows;
+use thermocontact::model::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use thermocontact::model::State;
+use thermocontact::step::{SolverKind, SolverParams};
+use thermocontact::model::contact_rows;
 
 type Rotation = [[f64; 3]; 3];
 
@@ -77,7 +77,7 @@ fn run(problem: &Problem, kind: SolverKind) -> Vec<(State, usize)> {
         ..SolverParams::default()
     };
     let mut states = Vec::new();
-    thermocontact::time::run(problem, &params, |state, _| {
+    thermocontact::time::run::<thermocontact::time::TimeError>(problem, &params, |state, _| {
         let slip = contact_rows(problem, state, 1e-6).iter().filter(|r| r.slip).count();
         states.push((state.clone(), slip));
         Ok(())

@@ -10,7 +10,8 @@ use std::process::Command;
 use common::coarse;
 use thermocontact::contact::friction::law_residual;
 use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
-use thermocontact::time::{contact_rows, Levels};
+use thermocontact::model::contact_rows;
+use thermocontact::time::{Levels, TimeError};
 use thermocontact::Scenario;
 
 fn scratch(tag: &str) -> PathBuf {
@@ -78,12 +79,12 @@ fn a_starved_solver_is_rescued_by_cutback_and_every_step_satisfies_the_law() {
     no_cutback.cutback = false;
     let error = driver::run(&problem, &no_cutback, &OutputPlan::default(), &RunOptions::default()).unwrap_err();
     match error {
-        thermocontact::Error::NotConverged {
+        thermocontact::Error::Time(TimeError::NotConverged {
             step,
             cutback_depth,
             failure,
             ..
-        } => {
+        }) => {
             assert_eq!(step, 6);
             assert_eq!(cutback_depth, 0);
             assert_eq!(failure.iterations, 5);
@@ -107,13 +108,13 @@ fn two_substeps_of_half_size_are_the_run_with_twice_the_steps() {
     assert_eq!(half.step_size(), problem.time_step() / 2.0);
 
     let mut fine_states = Vec::new();
-    thermocontact::time::run(&fine_problem, &params, |state, _| {
+    thermocontact::time::run::<thermocontact::time::TimeError>(&fine_problem, &params, |state, _| {
         fine_states.push(state.clone());
         Ok(())
     })
     .unwrap();
 
-    let mut state = thermocontact::solver::system::State::initial(&problem);
+    let mut state = thermocontact::model::State::initial(&problem);
     let k = problem.time_step();
     for n in 1..=4 {
         let middle = state.t + k / 2.0;

@@ -7,12 +7,13 @@ mod common;
 
 use common::coarse;
 use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
-use thermocontact::norms;
-use thermocontact::problem::Problem;
-use thermocontact::solver::descent::{descend, ContactStiffness, DescentParams, Start};
-use thermocontact::solver::newton::{CondensedStep, NewtonParams};
-use thermocontact::solver::paper::{PaperParams, PaperSolver};
-use thermocontact::solver::system::{State, StepSystem};
+use thermocontact::model::norms;
+use thermocontact::model::Problem;
+use thermocontact::step::descent::{descend, ContactStiffness, DescentParams, Start};
+use thermocontact::step::newton::{CondensedStep, NewtonParams};
+use thermocontact::step::paper::{PaperParams, PaperSolver};
+use thermocontact::model::State;
+use thermocontact::step::direct::StepSystem;
 use thermocontact::Scenario;
 
 const NEWTON: NewtonParams = NewtonParams {
@@ -26,7 +27,7 @@ fn with_step_six(scenario: &Scenario, check: impl FnOnce(&CondensedStep, &Contac
     let problem = scenario.build().unwrap();
     let params = scenario.solver_params();
     let mut states = Vec::new();
-    thermocontact::time::run(&problem, &params, |state, _| {
+    thermocontact::time::run::<thermocontact::time::TimeError>(&problem, &params, |state, _| {
         states.push(state.clone());
         Ok(())
     })
@@ -39,7 +40,7 @@ fn with_step_six(scenario: &Scenario, check: impl FnOnce(&CondensedStep, &Contac
     let free = system.free_step(&problem, previous, t).unwrap();
     let step = condensed(&problem, &paper, t);
     let stiffness = stiffness(&problem, &paper);
-    let w_previous = thermocontact::solver::paper::contact_tangential(&problem, &previous.w);
+    let w_previous = thermocontact::model::contact_tangential(&problem, &previous.w);
     check(&step, &stiffness, &free.w_free, &w_previous);
 }
 

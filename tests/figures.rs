@@ -7,7 +7,7 @@ use std::process::Command;
 
 use thermocontact::mesh::chains;
 use thermocontact::output::figures::{render, DeformedFigure, Figure, Panel};
-use thermocontact::reproduction::{panel_title, record_run};
+use thermocontact::studies::reproduction::{panel_title, record_run};
 use thermocontact::Scenario;
 
 fn bin() -> Command {
@@ -184,8 +184,8 @@ fn reproduce_writes_tables_into_the_report_between_its_markers() {
         &report,
         format!(
             "# Report\n\n{}\nstale\n{}\n\nThe end.\n",
-            thermocontact::reproduction::study::BEGIN_MARKER,
-            thermocontact::reproduction::study::END_MARKER
+            thermocontact::studies::reproduction::study::BEGIN_MARKER,
+            thermocontact::studies::reproduction::study::END_MARKER
         ),
     )
     .unwrap();
@@ -243,7 +243,7 @@ fn bad_figure_options_exit_non_zero_naming_the_option() {
 /// mesh is the one marked "(default)", and its θ_D and time step head the tables.
 #[test]
 fn the_report_tables_were_made_with_the_default_scenario() {
-    use thermocontact::reproduction::study::{BEGIN_MARKER, END_MARKER};
+    use thermocontact::studies::reproduction::study::{BEGIN_MARKER, END_MARKER};
     let report = include_str!("../docs/reproduction.md");
     let begin = report.find(BEGIN_MARKER).expect("the report has the begin marker") + BEGIN_MARKER.len();
     let end = begin + report[begin..].find(END_MARKER).expect("and the end marker");

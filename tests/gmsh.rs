@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use thermocontact::mesh::{self, msh_text, read_msh, Mesh, MeshError};
-use thermocontact::solver::SolverKind;
+use thermocontact::step::SolverKind;
 use thermocontact::Scenario;
 
 fn meshes() -> PathBuf {
@@ -272,7 +272,7 @@ fn the_2d_showcase_runs_from_the_command_line() {
 /// symmetry plane must be flat.
 #[test]
 fn overlapping_parts_and_curved_symmetry_planes_are_refused() {
-    use thermocontact::problem::{ProblemBuilder, TimeGrid};
+    use thermocontact::model::{ProblemBuilder, TimeGrid};
     let r = mesh::rectangle(4.0, 1.0, 4, 1);
     let bottom = r.part_index("bottom").unwrap();
     let mut facets = r.facets.clone();

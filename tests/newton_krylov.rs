@@ -5,8 +5,8 @@
 //! previous step) and with Tresca's law (unique solution).
 
 use thermocontact::driver::Summary;
-use thermocontact::norms;
-use thermocontact::solver::system::State;
+use thermocontact::model::norms;
+use thermocontact::model::State;
 use thermocontact::Scenario;
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
@@ -46,7 +46,7 @@ fn compare(file: Option<&str>, overrides: &[&str]) -> Summary {
         iterative_summary.max_law_residual
     );
     for (d, i) in direct_summary.outputs.iter().zip(&iterative_summary.outputs) {
-        let status = |rows: &[thermocontact::time::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
+        let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
         assert_eq!(status(&d.contact), status(&i.contact), "node statuses at t = {}", d.t);
         assert!(d.slip_nodes > 0, "the comparison should see slip (t = {})", d.t);
     }
@@ -186,7 +186,7 @@ fn krylov_iterations_stay_bounded_under_refinement() {
 /// factor fits.
 #[test]
 fn auto_picks_the_path_by_size_and_memory() {
-    use thermocontact::solver::{LinearKind, SolverKind};
+    use thermocontact::step::{LinearKind, SolverKind};
     use LinearKind::{Auto, Direct, Iterative};
     use SolverKind::{Fast, Paper};
     let gib = (1u64 << 30) as f64;

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use common::coarse;
 use thermocontact::driver::{self, OutputPlan, Restart, RunOptions, RunStatus, StopFlag, CHECKPOINT_FILE};
-use thermocontact::solver::SolverParams;
+use thermocontact::step::SolverParams;
 use thermocontact::{Error, Interruption, Scenario};
 
 fn scratch(tag: &str) -> PathBuf {

@@ -1,7 +1,7 @@
 //! Agreement of the two nonsmooth solvers: the fast semismooth Newton solver reaches the same
 //! discrete solution as the paper's convexification + augmented-Lagrangian solver.
 
-use thermocontact::norms;
+use thermocontact::model::norms;
 use thermocontact::Scenario;
 
 fn compare(file: Option<&str>, overrides: &[&str]) {
@@ -39,7 +39,7 @@ fn compare(file: Option<&str>, overrides: &[&str]) {
             "stick/slip counts at t = {}",
             p.t
         );
-        let status = |rows: &[thermocontact::time::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
+        let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
         assert_eq!(status(&p.contact), status(&f.contact), "node statuses at t = {}", p.t);
     }
 }

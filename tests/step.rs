@@ -3,10 +3,13 @@
 
 use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::law_residual;
-use thermocontact::solver::condensed::Condensation;
-use thermocontact::solver::system::{add_contact_terms, tangential_velocities, State, StepSystem};
-use thermocontact::solver::{Criterion, SolveError};
-use thermocontact::time::{contact_rows, LinearSystem, StepSolver};
+use thermocontact::step::condensed::Condensation;
+use thermocontact::model::State;
+use thermocontact::step::direct::{add_contact_terms, tangential_velocities, StepSystem};
+use thermocontact::la::LaError;
+use thermocontact::step::{Criterion, SolveError, StepError};
+use thermocontact::model::contact_rows;
+use thermocontact::step::{LinearSystem, StepSolver};
 use thermocontact::Scenario;
 
 fn coarse(overrides: &[&str]) -> Scenario {
@@ -194,7 +197,7 @@ fn a_non_finite_solve_is_an_error() {
     system.solve_in_place(&mut x.clone()).unwrap();
     x[0] = f64::NAN;
     match system.solve_in_place(&mut x) {
-        Err(thermocontact::Error::NonFiniteSolution { non_finite, unknowns }) => {
+        Err(StepError::La(LaError::NonFiniteSolution { non_finite, unknowns })) => {
             assert!(non_finite > 0 && non_finite <= unknowns);
             assert_eq!(unknowns, system.n_unknowns());
         }

@@ -1,6 +1,6 @@
 //! A whole run, as the `run` command does it: claim the output folder, factor, step through
 //! time, write the results, and account for the time spent. The problem comes built
-//! ([`crate::problem::ProblemBuilder`]); the time loop is [`time::march_from`], observed here
+//! ([`crate::model::ProblemBuilder`]); the time loop is [`time::march_from`], observed here
 //! for output, checkpoints, progress, logs and timings.
 //!
 //! ```text
@@ -40,11 +40,13 @@ use crate::error::Error;
 use crate::output::checkpoint::{self, Checkpoint, CheckpointError, Identity};
 use crate::output::folder::{Existing, RunFolder};
 use crate::output::{self, fields, Compression, Field, Grid, PvdEntry};
-use crate::problem::Problem;
-use crate::solver::krylov::PreconditionerKind;
-use crate::solver::system::State;
-use crate::solver::{LinearKind, SolverKind, SolverParams, StepInfo};
-use crate::time::{self, contact_rows, ContactRow, Levels, LinearSystem, StepSolver, Stopped};
+use crate::model::Problem;
+use crate::step::PreconditionerKind;
+use crate::model::State;
+use crate::step::{LinearKind, SolverKind, SolverParams, StepInfo};
+use crate::model::{contact_rows, ContactRow};
+use crate::step::{LinearSystem, StepSolver};
+use crate::time::{self, Levels, Stopped};
 
 pub use stop::StopFlag;
 use writer::FrameWriter;
@@ -194,7 +196,7 @@ impl Setup<'_> {
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
-            peak_memory_mib: crate::bench::peak_memory_mib(),
+            peak_memory_mib: crate::studies::bench::peak_memory_mib(),
             max_law_residual: tally.max_law_residual,
             cutbacks: tally.cutbacks.clone(),
             status,
@@ -626,12 +628,12 @@ fn frame_tag(n: usize) -> String {
 fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> (f64, usize) {
     let law = problem.friction.as_ref();
     let tangential = problem.dim() - 1;
-    let w_tau = crate::solver::paper::contact_tangential(problem, &state.w);
+    let w_tau = crate::model::contact_tangential(problem, &state.w);
     let mut worst: f64 = 0.0;
     let mut slip = 0;
     for (w, xi) in w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential)) {
         worst = worst.max(crate::contact::friction::law_residual(law, w, xi, slip_tolerance));
-        slip += usize::from(crate::solver::system::norm2(w) > slip_tolerance);
+        slip += usize::from(crate::la::vector::norm2(w) > slip_tolerance);
     }
     (worst / law.bound(0.0).max(f64::MIN_POSITIVE), slip)
 }
@@ -711,7 +713,7 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
         min_temperature: state.theta.iter().cloned().fold(f64::INFINITY, f64::min),
         max_temperature: state.theta.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         max_displacement,
-        energy_norm_u: crate::norms::energy(&problem.matrices, &state.u),
+        energy_norm_u: crate::model::norms::energy(&problem.matrices, &state.u),
         contact,
     }
 }

@@ -5,10 +5,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
+use crate::time::TimeError;
 use crate::output::PvdEntry;
-use crate::solver::system::State;
-use crate::solver::{StepFailure, StepInfo};
-use crate::time::ContactRow;
+use crate::model::State;
+use crate::step::{StepFailure, StepInfo};
+use crate::model::ContactRow;
 
 /// Wall time per phase, in seconds.
 #[derive(Debug, Clone, Default, Serialize)]
@@ -203,12 +204,12 @@ pub struct FailureRecord {
 impl FailureRecord {
     pub fn new(error: &Error, last: &State) -> Self {
         let (step, time, cutback_depth, solver) = match error {
-            Error::NotConverged {
+            Error::Time(TimeError::NotConverged {
                 step,
                 time,
                 cutback_depth,
                 failure,
-            } => (Some(*step), Some(*time), Some(*cutback_depth), Some(failure.clone())),
+            }) => (Some(*step), Some(*time), Some(*cutback_depth), Some(failure.clone())),
             _ => (None, None, None, None),
         };
         FailureRecord {

@@ -31,8 +31,8 @@ use super::summary::{OutputRecord, Tally};
 use super::{write_snapshot, OutputPlan};
 use crate::error::Error;
 use crate::output::{self, PvdEntry};
-use crate::problem::Problem;
-use crate::solver::system::State;
+use crate::model::Problem;
+use crate::model::State;
 
 /// Frames sent to the writer and not yet taken up, beyond the one it writes.
 pub const QUEUE: usize = 1;

@@ -5,8 +5,8 @@
 use rayon::prelude::*;
 
 use super::kernels;
-use super::simplex::{facet_measure, Simplex};
-use super::sparse::{ColumnsMut, CscMatrix, NodeGraph};
+use crate::mesh::simplex::{facet_measure, Simplex};
+use crate::la::{ColumnsMut, CscMatrix, NodeGraph};
 use crate::material::{Isotropic, Material};
 use crate::mesh::Mesh;
 

@@ -4,5 +4,3 @@
 pub mod assembly;
 pub mod dofs;
 pub mod kernels;
-pub mod simplex;
-pub mod sparse;

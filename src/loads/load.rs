@@ -2,7 +2,7 @@
 
 use super::quadrature::{self, Rule};
 use super::{Datum, LoadError};
-use crate::fem::simplex::{facet_measure, Simplex};
+use crate::mesh::simplex::{facet_measure, Simplex};
 use crate::mesh::Mesh;
 
 /// Where a load acts and what its datum means.

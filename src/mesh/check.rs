@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use super::{topology, Mesh};
-use crate::fem::simplex::Simplex;
+use crate::mesh::simplex::Simplex;
 
 /// What is wrong with a mesh or a mesh file. Every variant says what and where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -122,7 +122,7 @@ pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::simplex::{facet_measure, Simplex};
+    use crate::mesh::simplex::{facet_measure, Simplex};
     use std::collections::HashMap;
 
     #[test]

@@ -12,6 +12,7 @@
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 
+pub mod simplex;
 mod annulus;
 pub mod chains;
 mod check;
@@ -169,7 +170,7 @@ impl Mesh {
     /// Measure |Ω| (sum of cell measures).
     pub fn volume(&self) -> f64 {
         (0..self.n_cells())
-            .map(|e| crate::fem::simplex::Simplex::new(self.dim, &self.cell_coords(e)).measure)
+            .map(|e| crate::mesh::simplex::Simplex::new(self.dim, &self.cell_coords(e)).measure)
             .sum()
     }
 }

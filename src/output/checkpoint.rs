@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::mesh::Mesh;
-use crate::solver::system::State;
+use crate::model::State;
 
 const MAGIC: &[u8; 8] = b"TCCKPT\x00\x01";
 

@@ -1,10 +1,10 @@
 //! Derived fields for output: the stress σ = 𝒜ε(w) + ℬε(u) + C(θ − θ_ref) per cell (eq. (1)),
 //! its von Mises norm, and the contact status and friction stress per node.
 
-use crate::fem::simplex::Simplex;
-use crate::problem::Problem;
-use crate::solver::system::State;
-use crate::time::ContactRow;
+use crate::mesh::simplex::Simplex;
+use crate::model::Problem;
+use crate::model::State;
+use crate::model::ContactRow;
 
 /// The symmetric-tensor components written per cell, in VTK's order for 6-component arrays
 /// (xx, yy, zz, xy, yz, xz), which ParaView reads as a symmetric tensor, in 2D as in 3D.

@@ -25,7 +25,7 @@ use crate::mesh::chains::{self, Chain};
 use crate::mesh::Mesh;
 use crate::output::plot::{ensure_fonts, FONT};
 use crate::output::{write_atomic, OutputError};
-use crate::time::ContactRow;
+use crate::model::ContactRow;
 
 /// Errors of figure making.
 #[derive(Debug, thiserror::Error)]
@@ -222,7 +222,7 @@ impl DeformedFigure<'_> {
             .panels
             .iter()
             .flat_map(|p| p.contact.iter())
-            .map(|r| crate::solver::system::norm2(&r.xi))
+            .map(|r| crate::la::vector::norm2(&r.xi))
             .fold(0.0, f64::max);
         ArrowLayout {
             spacing,

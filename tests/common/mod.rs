@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use faer::linalg::solvers::Solve;
-use thermocontact::fem::sparse::CscMatrix;
+use thermocontact::la::CscMatrix;
 use thermocontact::material::{Isotropic, Material};
 use thermocontact::Scenario;
 

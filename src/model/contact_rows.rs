@@ -1,0 +1,99 @@
+//! The contact state at the nodes of Γ_C, as output and summaries read it: w_τ and ξ in each
+//! node's tangent coordinates, the friction bound, slip or stick, θ.
+//!
+//! Depends on: [`super::problem`], [`super::state`], [`crate::la::vector`].
+
+use serde::Serialize;
+
+use super::problem::Problem;
+use super::state::State;
+use crate::la::vector::norm2;
+
+/// Tangential velocities at the contact nodes from a full velocity vector: node-major, in each
+/// node's tangent coordinates.
+pub fn contact_tangential(problem: &Problem, w_full: &[f64]) -> Vec<f64> {
+    let d = problem.dim();
+    problem
+        .contact
+        .iter()
+        .flat_map(|node| {
+            let w = &w_full[node.node * d..(node.node + 1) * d];
+            node.tangents.iter().map(move |t| (0..d).map(|c| t[c] * w[c]).sum())
+        })
+        .collect()
+}
+
+/// The contact state at one node of Γ_C.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactRow {
+    /// Mesh node.
+    pub node: usize,
+    /// Position in the reference configuration.
+    pub x: [f64; 3],
+    /// ν_i, the node's unit outward normal.
+    pub normal: [f64; 3],
+    /// The node's tangent basis t_1 … t_{d−1} (2D: ν turned by +90°, the x direction for the
+    /// paper's Γ_C).
+    pub tangents: Vec<[f64; 3]>,
+    /// w_τ in the node's tangent coordinates (d − 1).
+    pub w_tau: Vec<f64>,
+    /// ξ, the friction stress, in the node's tangent coordinates (d − 1).
+    pub xi: Vec<f64>,
+    /// The friction bound μ(|w_τ|) S at this node.
+    pub bound: f64,
+    /// |w_τ| > slip tolerance.
+    pub slip: bool,
+    /// θ at the node.
+    pub theta: f64,
+}
+
+impl ContactRow {
+    /// ξ as a vector in global coordinates, Σ_k ξ_k t_k.
+    pub fn friction_vector(&self) -> [f64; 3] {
+        combine(&self.tangents, &self.xi)
+    }
+
+    /// w_τ as a vector in global coordinates, Σ_k w_{τ,k} t_k.
+    pub fn slip_vector(&self) -> [f64; 3] {
+        combine(&self.tangents, &self.w_tau)
+    }
+
+    /// |w_τ|.
+    pub fn slip_rate(&self) -> f64 {
+        norm2(&self.w_tau)
+    }
+}
+
+fn combine(tangents: &[[f64; 3]], coordinates: &[f64]) -> [f64; 3] {
+    let mut v = [0.0; 3];
+    for (t, a) in tangents.iter().zip(coordinates) {
+        (0..3).for_each(|c| v[c] += a * t[c]);
+    }
+    v
+}
+
+/// The contact rows of a state; a node slips when |w_τ| exceeds `slip_tolerance`.
+pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Vec<ContactRow> {
+    let tangential = problem.dim() - 1;
+    let w_tau = contact_tangential(problem, &state.w);
+    problem
+        .contact
+        .iter()
+        .zip(w_tau.chunks_exact(tangential))
+        .zip(state.xi.chunks_exact(tangential))
+        .map(|((node, w), xi)| {
+            let speed = norm2(w);
+            ContactRow {
+                node: node.node,
+                x: problem.mesh.coords[node.node],
+                normal: node.normal,
+                tangents: node.tangents.clone(),
+                w_tau: w.to_vec(),
+                xi: xi.to_vec(),
+                bound: problem.friction.bound(speed),
+                slip: speed > slip_tolerance,
+                theta: state.theta[node.node],
+            }
+        })
+        .collect()
+}

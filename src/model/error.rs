@@ -1,0 +1,54 @@
+//! The errors of building a problem: parts the mesh lacks, loads on the wrong part, initial
+//! data outside the spaces, and the mesh's and loads' own.
+
+/// Why a problem cannot be built, or a load not evaluated.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// A boundary part the mesh does not have.
+    #[error("the mesh has no boundary part `{name}` (named for {role}); its parts are {known:?}")]
+    UnknownPart {
+        role: String,
+        name: String,
+        known: Vec<String>,
+    },
+    /// A traction or pressure on a part that is not a Neumann part.
+    #[error("`{label}` acts on `{part}`, which is not a Neumann part (those are {neumann:?})")]
+    LoadOffNeumann {
+        label: String,
+        part: String,
+        neumann: Vec<String>,
+    },
+    /// Initial data outside E^h: not zero on Γ_D, a normal component on Γ_C, or across a
+    /// symmetry plane.
+    #[error(
+        "`{label}` is not admissible at node {node} (x = {x:?}): {value:?} must vanish on Γ_D and have no \
+         normal component on Γ_C or across a symmetry plane"
+    )]
+    InitialNotAdmissible {
+        label: String,
+        node: usize,
+        x: [f64; 3],
+        value: Vec<f64>,
+    },
+    /// Nodal initial fields whose sizes are not the mesh's.
+    #[error("`{label}` has fields of {found:?} values, but the mesh needs {expected:?} (u₀, u₁, θ₀)")]
+    InitialFieldSizes {
+        label: String,
+        found: Vec<usize>,
+        expected: Vec<usize>,
+    },
+    /// Two boundary parts given roles share facets (one facet in two physical groups).
+    #[error(
+        "the boundary parts `{first}` and `{second}` share facets: give each facet one role (in Gmsh, put it in one physical group)"
+    )]
+    PartsShareFacets { first: String, second: String },
+    /// A symmetry part that is not flat.
+    #[error("the symmetry part `{part}` is not flat (a symmetry plane needs one normal)")]
+    CurvedSymmetryPart { part: String },
+    /// A mesh that is not valid.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    /// A load that cannot be built or evaluated.
+    #[error(transparent)]
+    Load(#[from] crate::loads::LoadError),
+}

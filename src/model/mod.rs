@@ -1,0 +1,25 @@
+//! The discrete problem and its state: everything fixed during a run, and what changes.
+//!
+//! Depends on: [`crate::mesh`], [`crate::la`], [`crate::fem`], [`crate::material`],
+//! [`crate::loads`], [`crate::contact`].
+//!
+//! - [`Problem`], built by [`ProblemBuilder`] from typed parts (no TOML);
+//! - [`State`]: the fields carried from time level to time level;
+//! - [`StepMatrix`] and [`StepRhs`]: the linear part of one step of Problem 14;
+//! - [`norms`]: the norms of the stop criteria (77)–(80);
+//! - [`ContactRow`]: the state at a node of Γ_C, as output reads it;
+//! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
+
+mod contact_rows;
+mod error;
+pub mod norms;
+mod problem;
+pub mod samples;
+mod state;
+mod step_matrix;
+
+pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
+pub use error::ModelError;
+pub use problem::*;
+pub use state::State;
+pub use step_matrix::{assemble_by_columns, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs};

@@ -1,0 +1,76 @@
+//! The norms of the stop criteria (77)–(80) and of the error estimate (73).
+//!
+//! ‖v‖_E = ‖ε(v)‖_L², ‖θ‖_V = ‖∇θ‖_L² (exact for P1 through their Gram matrices); on Γ_C the
+//! nodal fields ξ and ζ use the same nodal quadrature as the contact terms:
+//! ‖ξ‖²_L²(ΓC) ≈ Σ_i ℓ_i |ξ_i|².
+
+use crate::fem::assembly::Matrices;
+use super::problem::Problem;
+use super::state::State;
+
+/// ‖ε(v)‖_L² of a full nodal vector field.
+pub fn energy(matrices: &Matrices, v: &[f64]) -> f64 {
+    matrices.energy_gram.quadratic_form(v).max(0.0).sqrt()
+}
+
+/// ‖∇θ‖_L² of a full nodal scalar field.
+pub fn gradient(matrices: &Matrices, theta: &[f64]) -> f64 {
+    matrices.gradient_gram.quadratic_form(theta).max(0.0).sqrt()
+}
+
+/// L²(Γ_C) norm of a nodal field on the frictional contact nodes: `field` node-major with the
+/// same number of components at every node (d − 1 tangent coordinates, or 1 for a scalar).
+pub fn contact_l2(problem: &Problem, field: &[f64]) -> f64 {
+    let n = problem.contact.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let width = field.len() / n;
+    problem
+        .contact
+        .iter()
+        .zip(field.chunks_exact(width))
+        .map(|(node, v)| node.weight * v.iter().map(|x| x * x).sum::<f64>())
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// ζ_i = −∂j(θ_i) at the contact nodes (the heat-exchange multiplier of Problem 14).
+pub fn heat_exchange_multiplier(problem: &Problem, theta: &[f64]) -> Vec<f64> {
+    problem
+        .contact
+        .iter()
+        .map(|node| -problem.exchange.derivative(theta[node.node]))
+        .collect()
+}
+
+/// Relative increments (77)–(80) between two iterates of one time step.
+pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64; 4] {
+    let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+    let ratio = |num: f64, den: f64| {
+        if num == 0.0 {
+            0.0
+        } else if den == 0.0 {
+            f64::INFINITY
+        } else {
+            num / den
+        }
+    };
+    let m = &problem.matrices;
+    let du = energy(m, &diff(&new.u, &old.u));
+    let dtheta = gradient(m, &diff(&new.theta, &old.theta));
+    let dxi = contact_l2(problem, &diff(&new.xi, &old.xi));
+    let zeta_new = heat_exchange_multiplier(problem, &new.theta);
+    let zeta_old = heat_exchange_multiplier(problem, &old.theta);
+    let zeta_diff = diff(&zeta_new, &zeta_old);
+    let zeta_ref = zeta_old;
+    [
+        ratio(du, energy(m, &old.u)),
+        ratio(dtheta, gradient(m, &old.theta)),
+        ratio(dxi, contact_l2(problem, &old.xi)),
+        ratio(
+            contact_l2(problem, &zeta_diff),
+            contact_l2(problem, &zeta_ref),
+        ),
+    ]
+}

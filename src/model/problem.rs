@@ -1,0 +1,624 @@
+//! The discrete problem: a mesh with its boundary parts, a material, the laws, the loads and the
+//! time grid, made discrete — everything that stays fixed during a run.
+//!
+//! A [`Problem`] is built by a [`ProblemBuilder`] from typed parts; nothing here knows the
+//! scenario file (the scenario layer translates TOML into these parts). A Rust user builds one
+//! directly:
+//!
+//! ```
+//! use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
+//! use thermocontact::loads::Datum;
+//! use thermocontact::material::{Isotropic, Material};
+//! use thermocontact::model::{LoadTarget, ProblemBuilder, TimeGrid};
+//!
+//! let mesh = thermocontact::mesh::rectangle(40.0, 10.0, 16, 4);
+//! let material = Material {
+//!     density: 100.0,
+//!     heat_capacity: 0.1,
+//!     viscosity: Isotropic::viscosity(50.0, 200.0),
+//!     elasticity: Isotropic::elasticity(10_000.0, 0.3),
+//!     expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
+//!     conductivity: 0.5,
+//!     reference_temperature: 0.0,
+//! };
+//! let problem = ProblemBuilder::new(mesh, material, TimeGrid::new(1.0, 8))
+//!     .dirichlet(&["left"])
+//!     .neumann(&["top", "right"])
+//!     .contact(&["bottom"])
+//!     .friction(SlipWeakening { scale: 150.0, a: 1.0, b: 0.2, alpha: 100.0 })
+//!     .heat_exchange(QuadraticExchange { coefficient: 1.0, foundation_temperature: 0.0 })
+//!     .frictional_heating(LinearHeating::affine(0.0, 10.0))
+//!     .load(LoadTarget::Traction("top".into()), Datum::affine(vec![0.0, 0.0], vec![0.0, -800.0]))
+//!     .build()
+//!     .unwrap();
+//! assert_eq!(problem.contact.len(), 16);
+//! ```
+
+use crate::contact::frames::{contact_frames, orthogonal_complement};
+use crate::contact::{FrictionLaw, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange, Tresca};
+use super::error::ModelError as Error;
+use crate::fem::assembly::{self, Matrices};
+use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
+use crate::loads::{nodal_values, Datum, Load, LoadKind};
+use crate::material::Material;
+use crate::mesh::Mesh;
+
+/// The time grid t_n = n k, n = 0 … N, k = T/N.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeGrid {
+    /// T, the final time.
+    pub final_time: f64,
+    /// N, the number of steps.
+    pub steps: usize,
+}
+
+impl TimeGrid {
+    /// N uniform steps up to T.
+    pub fn new(final_time: f64, steps: usize) -> Self {
+        TimeGrid { final_time, steps }
+    }
+
+    /// k = T/N.
+    pub fn step(&self) -> f64 {
+        self.final_time / self.steps as f64
+    }
+
+    /// t_n = n k.
+    pub fn time(&self, n: usize) -> f64 {
+        n as f64 * self.step()
+    }
+}
+
+/// A node of Γ_C that carries friction: not clamped, and free to slide along at least one
+/// tangent of its frame.
+#[derive(Debug, Clone)]
+pub struct ContactNode {
+    /// Mesh node.
+    pub node: usize,
+    /// ℓ_i = ∫_ΓC φ_i, the nodal quadrature weight.
+    pub weight: f64,
+    /// ν_i, the unit outward normal ([`crate::contact::frames`]).
+    pub normal: [f64; 3],
+    /// t_{i,1} … t_{i,d−1}: the node's orthonormal tangent basis; w_τ and ξ are coordinates in it.
+    pub tangents: Vec<[f64; 3]>,
+    /// The velocity unknown of each tangent coordinate (d − 1 entries); `None` where the
+    /// coordinate is held at zero (a corner of Γ_C or a symmetry plane through the node).
+    pub tangent_dofs: Vec<Option<usize>>,
+    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
+    pub theta_dof: Option<usize>,
+}
+
+/// The boundary parts of each role, as indices into the mesh's parts.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct BoundaryParts {
+    /// Γ_D: u = 0, θ = θ_D.
+    pub dirichlet: Vec<usize>,
+    /// Γ_N: tractions and pressures, θ = θ_D.
+    pub neumann: Vec<usize>,
+    /// Γ_C: bilateral contact, friction, heat exchange.
+    pub contact: Vec<usize>,
+    /// Symmetry (roller) planes: w·ν = 0, no shear traction, no heat flux.
+    pub symmetry: Vec<usize>,
+}
+
+/// Where a load acts.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LoadTarget {
+    /// f₀ over Ω (d components).
+    BodyForce,
+    /// f₂ on a Neumann part (d global components).
+    Traction(String),
+    /// A normal pressure p on a Neumann part: the traction −p ν.
+    Pressure(String),
+    /// g over Ω (one component).
+    HeatSource,
+}
+
+/// The initial data (10) as full nodal vectors: u₀ and w₀ = u₁ in E^h, θ₀ everywhere.
+#[derive(Debug, Clone)]
+pub struct InitialFields {
+    /// u₀, d per node.
+    pub displacement: Vec<f64>,
+    /// u₁ (the initial velocity), d per node.
+    pub velocity: Vec<f64>,
+    /// θ₀, one per node.
+    pub temperature: Vec<f64>,
+}
+
+/// Everything fixed during a run.
+#[derive(Debug)]
+pub struct Problem {
+    pub mesh: Mesh,
+    /// The mesh parts of each boundary role.
+    pub parts: BoundaryParts,
+    pub material: Material,
+    /// The time grid.
+    pub time: TimeGrid,
+    /// E^h.
+    pub velocity: VelocitySpace,
+    /// V^h.
+    pub temperature: TemperatureSpace,
+    pub matrices: Matrices,
+    /// Frictional contact nodes of Γ_C.
+    pub contact: Vec<ContactNode>,
+    /// ℓ_p on every node of Γ_C (including clamped ones), zero elsewhere.
+    pub contact_weights: Vec<f64>,
+    pub friction: Box<dyn FrictionLaw>,
+    pub exchange: Box<dyn HeatExchange>,
+    pub heating: Box<dyn FrictionalHeating>,
+    /// Loads on the velocity equation: F(t) = Σ ∫ f·φ.
+    forces: Vec<Load>,
+    /// Loads on the temperature equation: ∫ g η.
+    heat_sources: Vec<Load>,
+    /// k_e θ_R ∫_ΓC η: the foundation's part of the heat exchange (constant).
+    exchange_load: Vec<f64>,
+    /// θ_ref G 1 on full velocity dofs: the thermal stress C(θ − θ_ref) has a constant part
+    /// −Cθ_ref, which moves to the right-hand side as a load (zero for the paper's θ_ref = 0).
+    reference_load: Vec<f64>,
+    /// θ_D at Dirichlet nodes, zero elsewhere (full temperature vector).
+    pub theta_dirichlet: Vec<f64>,
+    /// u₀, u₁, θ₀.
+    pub initial: InitialFields,
+    /// Space–time dependent loads given as code rather than data (the verification family of
+    /// [`crate::studies::verification::manufactured`]); `None` otherwise.
+    pub extra_loads: Option<Box<dyn ExtraLoads>>,
+    /// Wall time the builder took, in seconds (reported as the run's assembly time).
+    pub build_seconds: f64,
+}
+
+/// Loads that vary in space and time given as code, added to the data loads: a body force
+/// f₀(x, t), tractions f₂(x, t) on Γ_N, a known load on Γ_C, a heat source g(x, t) and a known
+/// heat flux on Γ_C. Implementors integrate them into full load vectors (velocity dofs p·d + c,
+/// temperature dofs p); [`Problem::force`] and [`Problem::heat_load`] add them, so every solver
+/// sees them.
+pub trait ExtraLoads: Send + Sync + std::fmt::Debug {
+    /// Adds ∫ f₀(t)·φ + ∫_ΓN f₂(t)·φ + ∫_ΓC f_C(t)·φ to a full velocity load vector.
+    fn add_force(&self, problem: &Problem, t: f64, force: &mut [f64]);
+    /// Adds ∫ g(t) η + ∫_ΓC g_C(t) η to a full temperature load vector.
+    fn add_heat(&self, problem: &Problem, t: f64, heat: &mut [f64]);
+}
+
+/// Builds a [`Problem`] from typed parts. Boundary parts are named as in the mesh; defaults: no
+/// parts in any role, θ_D = 0, Tresca friction with bound 0, no heat exchange, no frictional
+/// heating, no loads, zero initial data.
+pub struct ProblemBuilder {
+    mesh: Mesh,
+    material: Material,
+    time: TimeGrid,
+    dirichlet: Vec<String>,
+    neumann: Vec<String>,
+    contact: Vec<String>,
+    symmetry: Vec<String>,
+    boundary_temperature: f64,
+    friction: Box<dyn FrictionLaw>,
+    exchange: QuadraticExchange,
+    heating: Box<dyn FrictionalHeating>,
+    loads: Vec<(LoadTarget, Datum, String)>,
+    initial: [(Datum, &'static str); 3],
+    /// Nodal initial fields that replace the three data above (a checkpoint of another run).
+    initial_fields: Option<(InitialFields, &'static str)>,
+    extra_loads: Option<Box<dyn ExtraLoads>>,
+}
+
+/// Names of the initial data, in the order of [`ProblemBuilder`]'s `initial` slots.
+const INITIAL_NAMES: [&str; 3] = [
+    "initial displacement u₀",
+    "initial velocity u₁",
+    "initial temperature θ₀",
+];
+
+impl ProblemBuilder {
+    /// A problem on `mesh` with `material` over the time grid `time`.
+    pub fn new(mesh: Mesh, material: Material, time: TimeGrid) -> Self {
+        let d = mesh.dim;
+        ProblemBuilder {
+            mesh,
+            material,
+            time,
+            dirichlet: Vec::new(),
+            neumann: Vec::new(),
+            contact: Vec::new(),
+            symmetry: Vec::new(),
+            boundary_temperature: 0.0,
+            friction: Box::new(Tresca { scale: 0.0 }),
+            exchange: QuadraticExchange {
+                coefficient: 0.0,
+                foundation_temperature: 0.0,
+            },
+            heating: Box::new(LinearHeating::affine(0.0, 0.0)),
+            loads: Vec::new(),
+            initial: [
+                (Datum::Constant(vec![0.0; d]), INITIAL_NAMES[0]),
+                (Datum::Constant(vec![0.0; d]), INITIAL_NAMES[1]),
+                (Datum::Constant(vec![0.0]), INITIAL_NAMES[2]),
+            ],
+            initial_fields: None,
+            extra_loads: None,
+        }
+    }
+
+    /// Γ_D: the clamped parts (may be empty: in dynamics the mass term keeps the step matrix
+    /// definite, so a body held by friction alone is well posed).
+    pub fn dirichlet(mut self, parts: &[&str]) -> Self {
+        self.dirichlet = strings(parts);
+        self
+    }
+
+    /// Γ_N: the loaded parts (θ = θ_D there too, eq. (6)).
+    pub fn neumann(mut self, parts: &[&str]) -> Self {
+        self.neumann = strings(parts);
+        self
+    }
+
+    /// Γ_C: the contact parts, flat or curved; normals come from the mesh.
+    pub fn contact(mut self, parts: &[&str]) -> Self {
+        self.contact = strings(parts);
+        self
+    }
+
+    /// Symmetry (roller) planes: flat parts with w·ν = 0.
+    pub fn symmetry(mut self, parts: &[&str]) -> Self {
+        self.symmetry = strings(parts);
+        self
+    }
+
+    /// θ_D on Γ_D ∪ Γ_N.
+    pub fn boundary_temperature(mut self, theta: f64) -> Self {
+        self.boundary_temperature = theta;
+        self
+    }
+
+    /// The friction law on Γ_C.
+    pub fn friction(mut self, law: impl FrictionLaw + 'static) -> Self {
+        self.friction = Box::new(law);
+        self
+    }
+
+    /// The heat exchange with the foundation on Γ_C.
+    pub fn heat_exchange(mut self, law: QuadraticExchange) -> Self {
+        self.exchange = law;
+        self
+    }
+
+    /// The frictional heating h_τ on Γ_C.
+    pub fn frictional_heating(mut self, law: impl FrictionalHeating + 'static) -> Self {
+        self.heating = Box::new(law);
+        self
+    }
+
+    /// Adds a load; its label names it in errors (defaults to the target).
+    pub fn load(self, target: LoadTarget, datum: Datum) -> Self {
+        let label = format!("{target:?}");
+        self.labelled_load(target, datum, label)
+    }
+
+    /// Adds a load named `label` in errors (the scenario passes its key).
+    pub fn labelled_load(mut self, target: LoadTarget, datum: Datum, label: String) -> Self {
+        self.loads.push((target, datum, label));
+        self
+    }
+
+    /// u₀ (d components), named `label` in errors.
+    pub fn initial_displacement(mut self, datum: Datum, label: &'static str) -> Self {
+        self.initial[0] = (datum, label);
+        self
+    }
+
+    /// u₁ (d components), named `label` in errors.
+    pub fn initial_velocity(mut self, datum: Datum, label: &'static str) -> Self {
+        self.initial[1] = (datum, label);
+        self
+    }
+
+    /// θ₀ (one component), named `label` in errors.
+    /// u₀, u₁ and θ₀ as nodal values (d, d and 1 per node; e.g. the state of another run),
+    /// replacing the three initial data; `label` names them in errors.
+    pub fn initial_fields(mut self, fields: InitialFields, label: &'static str) -> Self {
+        self.initial_fields = Some((fields, label));
+        self
+    }
+
+    pub fn initial_temperature(mut self, datum: Datum, label: &'static str) -> Self {
+        self.initial[2] = (datum, label);
+        self
+    }
+
+    /// Loads given as code (see [`ExtraLoads`]).
+    pub fn extra_loads(mut self, loads: Box<dyn ExtraLoads>) -> Self {
+        self.extra_loads = Some(loads);
+        self
+    }
+
+    /// Makes the problem discrete: spaces, matrices, contact frames, loads, initial fields.
+    pub fn build(self) -> Result<Problem, Error> {
+        let clock = std::time::Instant::now();
+        let mesh = self.mesh;
+        let d = mesh.dim;
+        let find = |role: &'static str, names: &[String]| -> Result<Vec<usize>, Error> {
+            names.iter().map(|name| part_of(&mesh, role, name)).collect()
+        };
+        let parts = BoundaryParts {
+            dirichlet: find("dirichlet", &self.dirichlet)?,
+            neumann: find("neumann", &self.neumann)?,
+            contact: find("contact", &self.contact)?,
+            symmetry: find("symmetry", &self.symmetry)?,
+        };
+        no_shared_facets(&mesh, &parts)?;
+        let material = self.material;
+
+        // Constraints per node; Dirichlet wins at corners.
+        let clamped = mesh.nodes_on(&parts.dirichlet);
+        let planes = symmetry_planes(&mesh, &parts.symmetry)?;
+        let frames = contact_frames(
+            d,
+            mesh.n_nodes(),
+            mesh.facets_of(&parts.contact)
+                .map(|f| (mesh.facet(f).to_vec(), mesh.facet_area_vector(f))),
+            &planes,
+        );
+        let mut bases: Vec<NodeBasis> = (0..mesh.n_nodes())
+            .map(|p| match (clamped[p], planes[p].is_empty()) {
+                (true, _) => NodeBasis::Held,
+                (false, true) => NodeBasis::Cartesian,
+                (false, false) => NodeBasis::Along(orthogonal_complement(d, &planes[p])),
+            })
+            .collect();
+        for (p, frame) in &frames {
+            if !clamped[*p] {
+                bases[*p] = NodeBasis::Along(frame.tangents[..frame.n_free].to_vec());
+            }
+        }
+        let velocity = VelocitySpace::new(d, &bases);
+        let theta_fixed = mesh.nodes_on(&[parts.dirichlet.clone(), parts.neumann.clone()].concat());
+        let temperature = TemperatureSpace::new(&theta_fixed);
+
+        let (k_e, theta_r) = self.exchange.robin();
+        let matrices = assembly::assemble_matrices(&mesh, &material, &parts.contact, k_e);
+        let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
+        let contact = frames
+            .into_iter()
+            .filter(|(p, frame)| !clamped[*p] && frame.n_free > 0)
+            .map(|(p, frame)| ContactNode {
+                node: p,
+                weight: contact_weights[p],
+                normal: frame.normal,
+                tangent_dofs: (0..d - 1)
+                    .map(|k| (k < frame.n_free).then(|| velocity.unknown(p, k)))
+                    .collect(),
+                tangents: frame.tangents,
+                theta_dof: temperature.free[p],
+            })
+            .collect();
+
+        let mut forces = Vec::new();
+        let mut heat_sources = Vec::new();
+        for (target, datum, label) in self.loads {
+            let (kind, list) = match &target {
+                LoadTarget::BodyForce => (LoadKind::BodyForce, &mut forces),
+                LoadTarget::Traction(name) => (
+                    LoadKind::Traction {
+                        parts: vec![load_part(&mesh, &parts, &label, name)?],
+                    },
+                    &mut forces,
+                ),
+                LoadTarget::Pressure(name) => (
+                    LoadKind::Pressure {
+                        parts: vec![load_part(&mesh, &parts, &label, name)?],
+                    },
+                    &mut forces,
+                ),
+                LoadTarget::HeatSource => (LoadKind::HeatSource, &mut heat_sources),
+            };
+            list.push(Load::new(&mesh, kind, datum, label)?);
+        }
+        let exchange_load = contact_weights.iter().map(|w| k_e * theta_r * w).collect();
+        let mut reference_load = vec![0.0; mesh.n_nodes() * d];
+        let theta_ref = material.reference_temperature;
+        if theta_ref != 0.0 {
+            matrices
+                .coupling
+                .mul_add(theta_ref, &vec![1.0; mesh.n_nodes()], &mut reference_load);
+        }
+        let theta_dirichlet = theta_fixed
+            .iter()
+            .map(|&f| if f { self.boundary_temperature } else { 0.0 })
+            .collect();
+
+        let initial = match self.initial_fields {
+            None => {
+                let [(u0, u0_label), (u1, u1_label), (theta0, theta0_label)] = self.initial;
+                InitialFields {
+                    displacement: admissible(&mesh, &velocity, nodal_values(&mesh, &u0, 0.0, u0_label)?, u0_label)?,
+                    velocity: admissible(&mesh, &velocity, nodal_values(&mesh, &u1, 0.0, u1_label)?, u1_label)?,
+                    temperature: nodal_values(&mesh, &theta0, 0.0, theta0_label)?,
+                }
+            }
+            Some((fields, label)) => {
+                let n = mesh.n_nodes();
+                let sizes = [
+                    fields.displacement.len(),
+                    fields.velocity.len(),
+                    fields.temperature.len(),
+                ];
+                if sizes != [n * d, n * d, n] {
+                    return Err(Error::InitialFieldSizes {
+                        label: label.to_string(),
+                        found: sizes.to_vec(),
+                        expected: vec![n * d, n * d, n],
+                    });
+                }
+                InitialFields {
+                    displacement: admissible(&mesh, &velocity, fields.displacement, label)?,
+                    velocity: admissible(&mesh, &velocity, fields.velocity, label)?,
+                    temperature: fields.temperature,
+                }
+            }
+        };
+
+        Ok(Problem {
+            mesh,
+            parts,
+            material,
+            time: self.time,
+            velocity,
+            temperature,
+            matrices,
+            contact,
+            contact_weights,
+            friction: self.friction,
+            exchange: Box::new(self.exchange),
+            heating: self.heating,
+            forces,
+            heat_sources,
+            exchange_load,
+            reference_load,
+            theta_dirichlet,
+            initial,
+            extra_loads: self.extra_loads,
+            build_seconds: clock.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+impl Problem {
+    /// Space dimension d.
+    pub fn dim(&self) -> usize {
+        self.mesh.dim
+    }
+
+    /// Time step k.
+    pub fn time_step(&self) -> f64 {
+        self.time.step()
+    }
+
+    /// Number of velocity unknowns.
+    pub fn n_w(&self) -> usize {
+        self.velocity.n_free
+    }
+
+    /// Number of unknowns of the coupled step system (velocity then temperature).
+    pub fn n_unknowns(&self) -> usize {
+        self.velocity.n_free + self.temperature.n_free
+    }
+
+    /// F(t): ⟨f(t), φ⟩ = ∫ f₀ · φ + ∫_ΓN f₂ · φ on full velocity dofs.
+    pub fn force(&self, t: f64) -> Result<Vec<f64>, Error> {
+        let mut force = self.reference_load.clone();
+        for load in &self.forces {
+            load.add_to(&self.mesh, t, &mut force)?;
+        }
+        if let Some(extra) = &self.extra_loads {
+            extra.add_force(self, t, &mut force);
+        }
+        Ok(force)
+    }
+
+    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs.
+    pub fn heat_load(&self, t: f64) -> Result<Vec<f64>, Error> {
+        let mut heat = self.exchange_load.clone();
+        for load in &self.heat_sources {
+            load.add_to(&self.mesh, t, &mut heat)?;
+        }
+        if let Some(extra) = &self.extra_loads {
+            extra.add_heat(self, t, &mut heat);
+        }
+        Ok(heat)
+    }
+
+    /// |Γ_C| by the nodal weights.
+    pub fn contact_measure(&self) -> f64 {
+        self.contact_weights.iter().sum()
+    }
+
+    /// The names of the mesh parts of a role, e.g. `problem.part_names(&problem.parts.neumann)`.
+    pub fn part_names(&self, parts: &[usize]) -> Vec<&str> {
+        parts.iter().map(|&p| self.mesh.part_names[p].as_str()).collect()
+    }
+}
+
+fn strings(names: &[&str]) -> Vec<String> {
+    names.iter().map(|s| s.to_string()).collect()
+}
+
+fn part_of(mesh: &Mesh, role: &'static str, name: &str) -> Result<usize, Error> {
+    mesh.part_index(name).ok_or_else(|| Error::UnknownPart {
+        role: role.to_string(),
+        name: name.to_string(),
+        known: mesh.part_names.clone(),
+    })
+}
+
+/// A load's part: a part of the mesh, and a Neumann part (a traction elsewhere would fight the
+/// constraint or the law that holds there).
+fn load_part(mesh: &Mesh, parts: &BoundaryParts, label: &str, name: &str) -> Result<usize, Error> {
+    let part = mesh.part_index(name).ok_or_else(|| Error::UnknownPart {
+        role: label.to_string(),
+        name: name.to_string(),
+        known: mesh.part_names.clone(),
+    })?;
+    if !parts.neumann.contains(&part) {
+        return Err(Error::LoadOffNeumann {
+            label: label.to_string(),
+            part: name.to_string(),
+            neumann: parts.neumann.iter().map(|&p| mesh.part_names[p].clone()).collect(),
+        });
+    }
+    Ok(part)
+}
+
+/// The datum at the nodes at t = 0, which must lie in E^h: zero on Γ_D, no normal component on
+/// Γ_C, none across a symmetry plane. Data that do not are an error rather than silently
+/// projected.
+/// Nodal values `full` (d per node) as an element of E^h, or the node where they leave it.
+fn admissible(mesh: &Mesh, space: &VelocitySpace, full: Vec<f64>, label: &str) -> Result<Vec<f64>, Error> {
+    let projected = space.prolong(&space.restrict_values(&full));
+    let scale = full.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let d = mesh.dim;
+    for (p, (a, b)) in full.chunks_exact(d).zip(projected.chunks_exact(d)).enumerate() {
+        let off: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+        if off > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+            return Err(Error::InitialNotAdmissible {
+                label: label.to_string(),
+                node: p,
+                x: mesh.coords[p],
+                value: a.to_vec(),
+            });
+        }
+    }
+    Ok(projected)
+}
+
+/// The parts given roles share no facet (a facet in two physical groups would otherwise count
+/// twice in Γ_C's weights or carry two boundary conditions).
+fn no_shared_facets(mesh: &Mesh, parts: &BoundaryParts) -> Result<(), Error> {
+    let roles = [&parts.dirichlet, &parts.neumann, &parts.contact, &parts.symmetry];
+    let used: Vec<usize> = roles.into_iter().flatten().copied().collect();
+    let mut keys: Vec<([usize; 3], usize)> = mesh
+        .facets_of(&used)
+        .map(|f| (crate::mesh::topology::facet_key(mesh.facet(f)), mesh.facet_parts[f]))
+        .collect();
+    keys.sort_unstable();
+    match keys.windows(2).find(|w| w[0].0 == w[1].0) {
+        Some(w) => Err(Error::PartsShareFacets {
+            first: mesh.part_names[w[0].1].clone(),
+            second: mesh.part_names[w[1].1].clone(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Per node, the unit normals of the symmetry planes through it.
+fn symmetry_planes(mesh: &Mesh, parts: &[usize]) -> Result<Vec<Vec<[f64; 3]>>, Error> {
+    let mut planes = vec![Vec::new(); mesh.n_nodes()];
+    for &part in parts {
+        let normal = mesh.part_normal(part).ok_or_else(|| Error::CurvedSymmetryPart {
+            part: mesh.part_names[part].clone(),
+        })?;
+        for (p, on) in mesh.nodes_on(&[part]).into_iter().enumerate() {
+            if on {
+                planes[p].push(normal);
+            }
+        }
+    }
+    Ok(planes)
+}

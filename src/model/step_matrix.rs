@@ -1,0 +1,399 @@
+//! The linear part of one time step of Problem 14: the step matrix and its right-hand side,
+//! shared by the direct path ([`super::system::StepSystem`], which factors it) and the iterative
+//! path ([`super::newton_krylov`], which preconditions it).
+//!
+//! With x = (W_n, Θ_n) on the unknowns of E^h × V^h:
+//!
+//! ```text
+//! (ℳ/k + 𝒦_A + k𝒦_B) W_n + G Θ_n   = ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n + Σ_i ℓ_i ξ_i·t
+//! −Gᵀ W_n + (ℳ_θ/k + 𝒦_θ) Θ_n       = ℳ_θ Θ_{n−1}/k + G_n + Σ_i ℓ_i h_τ(t_n, |w_i|)
+//! ```
+//!
+//! The matrix depends on k only, so it is assembled once per step size. It is not symmetric
+//! (±G); it is stored in its sign-flipped form S = J A, J = diag(I, −I), which is symmetric
+//! quasi-definite.
+
+use super::error::ModelError as Error;
+use crate::la::{CscMatrix, CsrMatrix};
+use super::problem::Problem;
+
+use super::state::State;
+
+/// The step matrix of step size k in its symmetric form S = J A, with its right-hand side.
+pub struct StepMatrix {
+    /// S = J A (rows of the temperature equations negated).
+    pub matrix: CscMatrix,
+    /// The right-hand side and the state of a solution.
+    pub rhs: StepRhs,
+}
+
+/// What the right-hand side of a step and the state of a solution need besides the matrix: the
+/// iterative path keeps this and lets the symmetric form go once it has its own copy of A.
+pub struct StepRhs {
+    /// Contributions of θ_D to the right-hand side (moved over from the matrix).
+    lift: Vec<f64>,
+    n_w: usize,
+    k: f64,
+}
+
+impl StepMatrix {
+    /// Assembles the reduced step matrix S for a step size k (unknowns in their own order).
+    pub fn assemble(problem: &Problem, k: f64) -> Self {
+        let n = problem.velocity.n_free + problem.temperature.n_free;
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        col_ptr.push(0);
+        let identity: Vec<usize> = (0..n).collect();
+        let rhs = assemble_by_columns(problem, k, &identity, |column| {
+            row_idx.extend(column.iter().map(|&(r, _)| r));
+            values.extend(column.iter().map(|&(_, v)| v));
+            col_ptr.push(row_idx.len());
+        });
+        StepMatrix {
+            matrix: CscMatrix {
+                n_rows: n,
+                n_cols: n,
+                col_ptr: col_ptr.into(),
+                row_idx: row_idx.into(),
+                values,
+            },
+            rhs,
+        }
+    }
+}
+
+/// The step matrix S = J A column by column, without a list of triplets: for each j, column
+/// `order[j]` of S with its rows renumbered by their place in `order` (sorted, duplicates
+/// summed) goes to `emit`. Memory beyond the caller's copy is O(unknowns).
+///
+/// With `order` a permutation P, the columns are those of P S Pᵀ; S is symmetric, so they are
+/// also its rows, and row j of P A Pᵀ is column j negated where `order[j]` is a temperature
+/// unknown (the iterative path builds its CSR of A this way, [`super::newton_krylov`]). The
+/// triplet list this replaces took 24 bytes per entry of the full-dof matrices (2.3 GB at 10⁶
+/// unknowns) on top of the matrix.
+///
+/// Returns the right-hand side's data (the θ_D lift).
+pub fn assemble_by_columns(
+    problem: &Problem,
+    k: f64,
+    order: &[usize],
+    mut emit: impl FnMut(&[(usize, f64)]),
+) -> StepRhs {
+    let (vel, temp) = (&problem.velocity, &problem.temperature);
+    let n_w = vel.n_free;
+    let n = n_w + temp.n_free;
+    assert_eq!(order.len(), n, "an ordering of every unknown");
+    let mats = &problem.matrices;
+    let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
+
+    // The θ_D lift: the columns of prescribed temperatures, moved to the right-hand side.
+    let theta_d = &problem.theta_dirichlet;
+    let mut lift = vec![0.0; n];
+    for (row, q, g) in coupling.triplets() {
+        if temp.free[q].is_none() {
+            for &(r, a) in vel.row(row) {
+                lift[r] += a * g * theta_d[q];
+            }
+        }
+    }
+    for (idx, (p, q, _)) in heat_mass.triplets().enumerate() {
+        if let (Some(r), None) = (temp.free[p], temp.free[q]) {
+            lift[n_w + r] += (heat_mass.values[idx] / k + mats.conduction.values[idx]) * theta_d[q];
+        }
+    }
+
+    // Pᵀ by unknowns: the full dofs (and coefficients) of each velocity unknown; the node of
+    // each temperature unknown; G by rows (full velocity dofs).
+    let mut full_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_w];
+    for f in 0..vel.n_full() {
+        for &(r, a) in vel.row(f) {
+            full_of[r].push((f, a));
+        }
+    }
+    let mut node_of = vec![0; temp.n_free];
+    for (q, free) in temp.free.iter().enumerate() {
+        if let Some(c) = free {
+            node_of[*c] = q;
+        }
+    }
+    let mut g_ptr = vec![0usize; coupling.n_rows + 1];
+    coupling.row_idx.iter().for_each(|&r| g_ptr[r + 1] += 1);
+    for r in 0..coupling.n_rows {
+        g_ptr[r + 1] += g_ptr[r];
+    }
+    let mut g_entries = vec![(0usize, 0.0); coupling.nnz()];
+    let mut fill = g_ptr.clone();
+    for (row, q, g) in coupling.triplets() {
+        g_entries[fill[row]] = (q, g);
+        fill[row] += 1;
+    }
+
+    let mut position = vec![0; n];
+    order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
+    // The column being summed: its values by position, which positions it has (an entry that
+    // sums to zero stays in the pattern), and their list.
+    let mut sum = vec![0.0; n];
+    let mut seen = vec![false; n];
+    let mut touched: Vec<usize> = Vec::new();
+    let mut column: Vec<(usize, f64)> = Vec::new();
+    let add = |row: usize, value: f64, sum: &mut [f64], seen: &mut [bool], touched: &mut Vec<usize>| {
+        let p = position[row];
+        if !seen[p] {
+            seen[p] = true;
+            touched.push(p);
+        }
+        sum[p] += value;
+    };
+    for &c in order {
+        touched.clear();
+        if c < n_w {
+            // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
+            for &(f, b) in &full_of[c] {
+                for idx in mass.col_ptr[f]..mass.col_ptr[f + 1] {
+                    let value = mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
+                    for &(r, a) in vel.row(mass.row_idx[idx]) {
+                        add(r, a * b * value, &mut sum, &mut seen, &mut touched);
+                    }
+                }
+                for &(q, g) in &g_entries[g_ptr[f]..g_ptr[f + 1]] {
+                    if let Some(cq) = temp.free[q] {
+                        add(n_w + cq, b * g, &mut sum, &mut seen, &mut touched);
+                    }
+                }
+            }
+        } else {
+            // Temperature column: G, and −(ℳ_θ/k + 𝒦_θ) in the (negated) temperature rows.
+            let q = node_of[c - n_w];
+            for (row, g) in coupling.row_idx[coupling.col_ptr[q]..coupling.col_ptr[q + 1]]
+                .iter()
+                .zip(&coupling.values[coupling.col_ptr[q]..coupling.col_ptr[q + 1]])
+            {
+                for &(r, a) in vel.row(*row) {
+                    add(r, a * g, &mut sum, &mut seen, &mut touched);
+                }
+            }
+            for idx in heat_mass.col_ptr[q]..heat_mass.col_ptr[q + 1] {
+                if let Some(r) = temp.free[heat_mass.row_idx[idx]] {
+                    let value = heat_mass.values[idx] / k + mats.conduction.values[idx];
+                    add(n_w + r, -value, &mut sum, &mut seen, &mut touched);
+                }
+            }
+        }
+        touched.sort_unstable();
+        column.clear();
+        for &p in &touched {
+            column.push((p, sum[p]));
+            sum[p] = 0.0;
+            seen[p] = false;
+        }
+        emit(&column);
+    }
+    StepRhs { lift, n_w, k }
+}
+
+impl StepRhs {
+    /// The step size k the matrix was made for.
+    pub fn step_size(&self) -> f64 {
+        self.k
+    }
+
+    /// Number of unknowns.
+    pub fn n_unknowns(&self) -> usize {
+        self.lift.len()
+    }
+
+    /// Number of velocity unknowns (the first block of x).
+    pub fn n_w(&self) -> usize {
+        self.n_w
+    }
+
+    /// The right-hand side of step n without the contact terms:
+    /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
+    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
+        let mats = &problem.matrices;
+        let mut mech = problem.force(t)?;
+        mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
+        mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
+        let mut heat = problem.heat_load(t)?;
+        mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
+
+        let mut rhs = vec![0.0; self.n_unknowns()];
+        problem.velocity.restrict_add(&mech, &mut rhs[..self.n_w]);
+        for (p, free) in problem.temperature.free.iter().enumerate() {
+            if let Some(r) = free {
+                rhs[self.n_w + r] = heat[p];
+            }
+        }
+        rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
+        Ok(rhs)
+    }
+
+    /// The unknowns x of a state: its velocity in E^h's coordinates and its temperatures at
+    /// the free nodes (the iterative path's initial guess).
+    pub fn unknowns_of(&self, problem: &Problem, state: &State) -> Vec<f64> {
+        let mut x = problem.velocity.restrict_values(&state.w);
+        x.resize(self.n_unknowns(), 0.0);
+        for (p, free) in problem.temperature.free.iter().enumerate() {
+            if let Some(r) = free {
+                x[self.n_w + r] = state.theta[p];
+            }
+        }
+        x
+    }
+
+    /// The new state at time t from the solution x of the step from `previous`.
+    pub fn state_from(&self, problem: &Problem, previous: &State, t: f64, x: &[f64], xi: Vec<f64>) -> State {
+        let w = problem.velocity.prolong(&x[..self.n_w]);
+        let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
+        let theta = problem
+            .temperature
+            .free
+            .iter()
+            .zip(&problem.theta_dirichlet)
+            .map(|(free, &fixed)| free.map_or(fixed, |r| x[self.n_w + r]))
+            .collect();
+        State {
+            n: previous.n + 1,
+            t,
+            w,
+            u,
+            theta,
+            xi,
+        }
+    }
+}
+
+/// A = J S from the symmetric form S = J A of the step matrix ([`super::system::StepSystem`]
+/// stores S), J = diag(I, −I) with the first `n_w` unknowns the velocities: S's columns are
+/// its rows, so A's rows are S's columns with the temperature rows negated.
+pub fn rows_of_symmetric_form(s: &CscMatrix, n_w: usize) -> CsrMatrix {
+    assert_eq!(s.n_rows, s.n_cols, "a square matrix");
+    let mut val = s.values.clone();
+    for row in n_w..s.n_cols {
+        for v in &mut val[s.col_ptr[row]..s.col_ptr[row + 1]] {
+            *v = -*v;
+        }
+    }
+    CsrMatrix::from_rows(
+        s.n_rows,
+        s.col_ptr.to_vec(),
+        s.row_idx.iter().map(|&r| index32(r)).collect(),
+        val,
+    )
+}
+
+/// P A Pᵀ of A = J S (as [`rows_of_symmetric_form`]) for the ordering `order`:
+/// row and column i of the result are row and column `order[i]` of A.
+///
+/// # Panics
+/// If `order` is not a permutation of S's unknowns.
+pub fn rows_of_symmetric_form_ordered(s: &CscMatrix, n_w: usize, order: &[usize]) -> CsrMatrix {
+    assert_eq!(order.len(), s.n_cols, "an ordering of every unknown");
+    let mut position = vec![usize::MAX; order.len()];
+    for (new, &old) in order.iter().enumerate() {
+        assert_eq!(position[old], usize::MAX, "unknown {old} ordered twice");
+        position[old] = new;
+    }
+    let mut ptr = Vec::with_capacity(s.n_cols + 1);
+    let mut col = Vec::with_capacity(s.values.len());
+    let mut val = Vec::with_capacity(s.values.len());
+    let mut row: Vec<(usize, f64)> = Vec::new();
+    ptr.push(0);
+    for &old in order {
+        // Row `old` of A is column `old` of S, negated in the temperature rows.
+        let sign = if old < n_w { 1.0 } else { -1.0 };
+        let range = s.col_ptr[old]..s.col_ptr[old + 1];
+        row.clear();
+        row.extend(
+            s.row_idx[range.clone()]
+                .iter()
+                .zip(&s.values[range])
+                .map(|(&c, &v)| (position[c], sign * v)),
+        );
+        row.sort_unstable_by_key(|&(c, _)| c);
+        col.extend(row.iter().map(|&(c, _)| index32(c)));
+        val.extend(row.iter().map(|&(_, v)| v));
+        ptr.push(col.len());
+    }
+    CsrMatrix::from_rows(s.n_cols, ptr, col, val)
+}
+
+/// A matrix index as the 32-bit index of the CSR layout.
+///
+/// # Panics
+/// Past 2³² unknowns, which the memory estimate refuses long before (`crate::resources`).
+fn index32(i: usize) -> u32 {
+    u32::try_from(i).expect("fewer than 2^32 unknowns")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::la::{gmres, GmresParams, Ilu0, QuasiDefiniteLdlt};
+
+    /// A small nonsymmetric positive-real matrix in the S = J A form: S = [[K, G], [Gᵀ, −M]].
+    fn small_s() -> (CscMatrix, usize) {
+        let n_w = 4;
+        let mut t = Vec::new();
+        for i in 0..6 {
+            let d = if i < n_w { 4.0 } else { -3.0 };
+            t.push((i, i, d));
+        }
+        for i in 0..n_w - 1 {
+            t.push((i, i + 1, -1.0));
+            t.push((i + 1, i, -1.0));
+        }
+        for (r, c, g) in [(0, 4, 0.5), (2, 5, -0.3), (3, 4, 0.2)] {
+            t.push((r, c, g));
+            t.push((c, r, g));
+        }
+        (CscMatrix::from_triplets(6, 6, t), n_w)
+    }
+
+    #[test]
+    fn ldlt_of_the_symmetric_form_and_gmres_on_its_rows_agree() {
+        let (s, n_w) = small_s();
+        let b = [1.0, -2.0, 0.5, 3.0, 1.0, -1.0];
+        // The direct solve: S x = J b.
+        let mut xd = b.to_vec();
+        xd[n_w..].iter_mut().for_each(|v| *v = -*v);
+        QuasiDefiniteLdlt::new(&s).unwrap().solve_in_place(&mut xd, 1);
+        // The iterative one: GMRES + ILU(0) on A.
+        let a = rows_of_symmetric_form(&s, n_w);
+        let params = GmresParams {
+            rtol: 1e-13,
+            ..GmresParams::default()
+        };
+        let mut xi = vec![0.0; 6];
+        let info = gmres(&a, &Ilu0::new(&a).unwrap(), &b, &mut xi, &params).unwrap();
+        assert!(info.iterations > 0 && info.residual <= 1e-13, "{info:?}");
+        for (d, i) in xd.iter().zip(&xi) {
+            assert!((d - i).abs() <= 1e-12, "{xd:?} {xi:?}");
+        }
+        // A x = b for A = J S.
+        let mut ax = vec![0.0; 6];
+        a.mul(&xd, &mut ax);
+        for (ax, b) in ax.iter().zip(&b) {
+            assert!((ax - b).abs() <= 1e-12);
+        }
+    }
+
+    /// The ordered form is P A Pᵀ: entry (i, j) is A's entry (order[i], order[j]).
+    #[test]
+    fn ordered_form_permutes_rows_and_columns() {
+        let (s, n_w) = small_s();
+        let a = rows_of_symmetric_form(&s, n_w);
+        let order = [2, 5, 0, 4, 1, 3];
+        let p = rows_of_symmetric_form_ordered(&s, n_w, &order);
+        let entry = |m: &CsrMatrix, i: usize, j: usize| {
+            let (cols, vals) = m.row(i);
+            cols.binary_search(&(j as u32)).map_or(0.0, |k| vals[k])
+        };
+        for i in 0..6 {
+            for j in 0..6 {
+                assert_eq!(entry(&p, i, j), entry(&a, order[i], order[j]));
+            }
+        }
+    }
+}

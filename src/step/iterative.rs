@@ -1,0 +1,358 @@
+//! The iterative back-end: the step problem solved on all unknowns, without condensation onto Γ_C,
+//! each linearization by GMRES preconditioned with ILU(0), or with ILU(0) sweeps around an AMG
+//! correction of the velocities where the stiffness weighs ([`super::amg`]) (issue 11).
+//!
+//! **Why not condense.** The direct path reduces a step to Γ_C through the dense compliance
+//! C = E_w A⁻¹ E_wᵀ ℓ ([`super::condensed`]), read from the trailing block of a direct factor.
+//! Both grow superlinearly in 3D: the factor's fill (194 M entries at 98k unknowns, no fit at
+//! 10⁶) and C itself (n_t², with n_t = 12 480 tangential unknowns at 10⁶ unknowns: 1.2 GB and an
+//! O(n_t³) inverse for the descent). Here nothing is condensed and nothing is dense: memory is
+//! A, its ILU(0) factor and a few vectors, O(N).
+//!
+//! **The linear solves.** The tangential velocity unknowns of Γ_C are ordered last, so that the
+//! rows a linearization changes are the last rows of Ã: their ILU(0) rows are refactored in
+//! O(n_t) per iteration ([`Ilu0::refactor_from`]) and the preconditioner is the ILU(0) of Ã
+//! itself, not of A (a stick row, w_i = 0, is far from A's row; preconditioning Ã with A's
+//! factor would leave GMRES a rank-n_t perturbation to find). Before them come the two halves
+//! of the mesh and the cross-section between them ([`super::bisection`]), so that the ILU(0)
+//! sweeps run the halves on the two cores. GMRES starts from the previous
+//! iterate (from the previous step's state at the first), so the later iterations of a step
+//! need few Krylov iterations. Why GMRES + ILU(0) and when it stays bounded:
+//! docs/krylov-study.md.
+
+use std::sync::Mutex;
+use std::time::Instant;
+
+use super::amg::VelocityAmg;
+use super::direct::{contact_tangential_unknowns, SystemStats};
+use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, StepFailure};
+use crate::la::{gmres_from_residual, level_bisection, CsrMatrix, FactorStage, Ilu0, LaError, NodeGraph, Part, SolveInfo};
+use crate::model::{assemble_by_columns, Problem, State, StepRhs};
+
+
+/// The rows of one contact node in the iterative path's ordering.
+#[derive(Debug, Clone)]
+pub(super) struct NodeRows {
+    /// (tangent coordinate k, row of its velocity unknown) for the coordinates that are not
+    /// held; the held ones keep w = ξ = 0.
+    pub(super) tangent: Vec<(usize, usize)>,
+    /// The row of the node's temperature unknown, if θ is not prescribed there.
+    pub(super) theta: Option<usize>,
+    /// ℓ_i.
+    pub(super) weight: f64,
+    /// r_i of the Alart–Curnier function: the node's own stiffness A_rr / ℓ_i, the inverse of
+    /// its local compliance (any r > 0 has the same solutions; this one shapes the iteration
+    /// like the fast solver's 1/λ_max(C)).
+    pub(super) augmentation: f64,
+}
+
+/// The step matrix with the Γ_C velocity unknowns last, its ILU(0) and the right-hand side:
+/// the iterative counterpart of [`super::direct::StepSystem`], set up once per step size.
+pub struct KrylovSystem {
+    pub(super) rhs: StepRhs,
+    /// Row i of the ordered system is unknown `order[i]`.
+    pub(super) order: Vec<usize>,
+    /// The first row of the Γ_C tangential velocities.
+    pub(super) first_contact: usize,
+    pub(super) nodes: Vec<NodeRows>,
+    /// The contact rows' values of A, rows `first_contact..n` one after the other
+    /// ([`CsrMatrix::values_from`]).
+    pub(super) base: Vec<f64>,
+    /// Ã and its ILU(0), changed in the contact rows by each linearization.
+    work: Mutex<(CsrMatrix, Ilu0)>,
+    /// The AMG coarse correction of the velocities, where the preconditioner has one (`amg`, or
+    /// `auto` resolved to it).
+    amg: Option<VelocityAmg>,
+    pub(super) params: KrylovParams,
+    stats: Mutex<SystemStats>,
+}
+
+/// The unknowns in the order of the ILU(0) sweeps, where the two domains end, and the first
+/// row of the Γ_C tangential velocities: the two parts of the mesh's [`level_bisection`] (each
+/// with its velocities, then its temperatures, in their own numbering), the separator's
+/// unknowns, then the Γ_C tangential velocities, last so that a linearization changes only the
+/// last rows. The parts share no entry of A, so [`Ilu0::with_domains`] sweeps them on two
+/// threads.
+fn sweep_order(problem: &Problem) -> (Vec<usize>, [usize; 2], usize) {
+    let n_w = problem.velocity.n_free;
+    let n = n_w + problem.temperature.n_free;
+    let tangential: Vec<usize> = contact_tangential_unknowns(problem).collect();
+    let mut is_contact = vec![false; n];
+    tangential.iter().for_each(|&r| is_contact[r] = true);
+    let mesh = &problem.mesh;
+    let mut node_of = vec![0; n];
+    let mut weight = vec![0; mesh.n_nodes()];
+    for (p, w) in weight.iter_mut().enumerate() {
+        let theta = problem.temperature.free[p].map(|r| n_w + r);
+        for r in problem.velocity.node_unknowns(p).chain(theta) {
+            node_of[r] = p;
+            *w += usize::from(!is_contact[r]);
+        }
+    }
+    let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
+    let part = level_bisection(&graph, &weight);
+    let (is_contact, part, node_of) = (&is_contact, &part, &node_of);
+    let in_part = |x: Part| (0..n).filter(move |&r| !is_contact[r] && part[node_of[r]] == x);
+    let first = in_part(Part::First).count();
+    let second = first + in_part(Part::Second).count();
+    let first_contact = n - tangential.len();
+    let order = (in_part(Part::First).chain(in_part(Part::Second)))
+        .chain(in_part(Part::Separator))
+        .chain(tangential)
+        .collect();
+    (order, [first, second], first_contact)
+}
+
+/// Whether ILU(0) alone needs more than [`PreconditionerKind::AUTO_AMG_ABOVE`] GMRES iterations
+/// for the first step's system (from the initial state, from zero, to 10⁻⁸): the probe of
+/// `solver.preconditioner = "auto"`, capped there so that it costs at most that many.
+fn ilu_needs_amg(
+    problem: &Problem,
+    rhs: &StepRhs,
+    order: &[usize],
+    (a, ilu): (&CsrMatrix, &Ilu0),
+) -> Result<bool, StepError> {
+    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.step_size())?;
+    let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
+    let mut x = vec![0.0; b.len()];
+    let probe = KrylovParams {
+        rtol: 1e-8,
+        max_iterations: PreconditionerKind::AUTO_AMG_ABOVE,
+        ..KrylovParams::default()
+    };
+    match gmres_from_residual(a, ilu, &b, &mut x, &mut Vec::new(), &probe.gmres()) {
+        Ok(_) => Ok(false),
+        Err(LaError::KrylovNotConverged { .. }) => Ok(true),
+        Err(other) => Err(other.into()),
+    }
+}
+
+impl KrylovSystem {
+    /// Assembles the step matrix of step size k in the order with the Γ_C tangential
+    /// velocities last, as A's rows (no symmetric form, no triplets: [`assemble_by_columns`]),
+    /// and factors its ILU(0).
+    pub fn new(problem: &Problem, k: f64, params: KrylovParams) -> Result<Self, StepError> {
+        let n_w = problem.velocity.n_free;
+        let n = n_w + problem.temperature.n_free;
+        if u32::try_from(n).is_err() {
+            return Err(LaError::Factorization {
+                stage: FactorStage::IncompleteLu,
+                detail: format!("{n} unknowns exceed 32-bit indices"),
+            }
+            .into());
+        }
+        let (order, parts, first_contact) = sweep_order(problem);
+        let mut position = vec![0; n];
+        order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
+
+        // Row j of P A Pᵀ is column j of P S Pᵀ, negated for a temperature unknown.
+        let mut ptr = Vec::with_capacity(n + 1);
+        let (mut col, mut val) = (Vec::new(), Vec::new());
+        ptr.push(0);
+        let mut j = 0;
+        let rhs = assemble_by_columns(problem, k, &order, |column| {
+            let sign = if order[j] < n_w { 1.0 } else { -1.0 };
+            col.extend(column.iter().map(|&(c, _)| c as u32));
+            val.extend(column.iter().map(|&(_, v)| sign * v));
+            ptr.push(col.len());
+            j += 1;
+        });
+        let a = CsrMatrix::from_rows(n, ptr, col, val);
+        let base = a.values_from(first_contact).to_vec();
+        let nodes = (problem.contact.iter())
+            .map(|node| {
+                let tangent: Vec<(usize, usize)> = (node.tangent_dofs.iter().enumerate())
+                    .filter_map(|(k, dof)| dof.map(|r| (k, position[r])))
+                    .collect();
+                let stiffness =
+                    tangent.iter().map(|&(_, row)| a.diagonal(row)).sum::<f64>() / tangent.len().max(1) as f64;
+                NodeRows {
+                    tangent,
+                    theta: node.theta_dof.map(|r| position[n_w + r]),
+                    weight: node.weight,
+                    augmentation: if node.weight > 0.0 && stiffness > 0.0 {
+                        stiffness / node.weight
+                    } else {
+                        1.0
+                    },
+                }
+            })
+            .collect();
+        let ilu = Ilu0::with_domains(&a, parts)?;
+        let with_amg = match params.preconditioner {
+            PreconditionerKind::Ilu => false,
+            PreconditionerKind::Amg => true,
+            PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
+        };
+        let amg = if with_amg {
+            Some(VelocityAmg::new(problem, &a, &order)?)
+        } else {
+            None
+        };
+        Ok(KrylovSystem {
+            rhs,
+            order,
+            first_contact,
+            nodes,
+            base,
+            work: Mutex::new((a, ilu)),
+            amg,
+            params,
+            stats: Mutex::new(SystemStats::default()),
+        })
+    }
+
+    /// The step size k.
+    pub fn step_size(&self) -> f64 {
+        self.rhs.step_size()
+    }
+
+    /// Stored entries of A and of its ILU(0) factor (the same pattern).
+    pub fn factor_nnz(&self) -> usize {
+        self.lock().1.nnz()
+    }
+
+    /// The preconditioner set up: [`PreconditionerKind::Ilu`] or [`PreconditionerKind::Amg`]
+    /// (`auto` resolved).
+    pub fn preconditioner(&self) -> PreconditionerKind {
+        if self.amg.is_some() {
+            PreconditionerKind::Amg
+        } else {
+            PreconditionerKind::Ilu
+        }
+    }
+
+    /// The AMG coarse correction, if the preconditioner has one.
+    pub fn amg(&self) -> Option<&VelocityAmg> {
+        self.amg.as_ref()
+    }
+
+    /// Solves Ã x = b̃ by GMRES from x with this system's preconditioner (see
+    /// [`gmres_from_residual`] for `residual`).
+    pub(super) fn gmres(
+        &self,
+        (a, ilu): (&CsrMatrix, &Ilu0),
+        rhs: &[f64],
+        x: &mut [f64],
+        residual: &mut Vec<f64>,
+    ) -> Result<SolveInfo, LaError> {
+        match &self.amg {
+            None => gmres_from_residual(a, ilu, rhs, x, residual, &self.params.gmres()),
+            Some(amg) => gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params.gmres()),
+        }
+    }
+
+    /// The step's right-hand side b (its linear part, without the contact terms) from
+    /// `previous` to time `t`, in the unknowns' numbering: with [`KrylovSystem::solve`], the
+    /// first step's system of studies and tests.
+    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, StepError> {
+        Ok(self.rhs.rhs(problem, previous, t)?)
+    }
+
+    /// Solves A x = b with the step matrix itself (its Γ_C rows as assembled, no contact
+    /// linearization), b and x in the unknowns' numbering, x holding the initial guess: one
+    /// solve of the constant matrix with this system's preconditioner, for studies and tests.
+    pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
+        let mut guard = self.lock();
+        let (a, ilu) = &mut *guard;
+        a.values_from_mut(self.first_contact).copy_from_slice(&self.base);
+        ilu.refactor_from(a, self.first_contact)?;
+        let b_ordered: Vec<f64> = self.order.iter().map(|&o| b[o]).collect();
+        let mut x_ordered: Vec<f64> = self.order.iter().map(|&o| x[o]).collect();
+        let info = self.gmres((a, ilu), &b_ordered, &mut x_ordered, &mut Vec::new())?;
+        self.order.iter().zip(&x_ordered).for_each(|(&o, v)| x[o] = *v);
+        Ok(info)
+    }
+
+    /// The work counters so far.
+    pub fn stats(&self) -> SystemStats {
+        *self.stats.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, (CsrMatrix, Ilu0)> {
+        self.work.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(super) fn count(&self, update: impl FnOnce(&mut SystemStats)) {
+        update(&mut self.stats.lock().unwrap_or_else(|e| e.into_inner()));
+    }
+}
+
+/// Solves Ã x = b̃ by GMRES from x (`residual`: b̃ − Ã x on entry when it has n entries, and
+/// after), counts the solve from `clock` on, and returns its Krylov iterations. A solve at its
+/// cap is a step failure of the linear solve, with its residual history.
+pub(super) fn krylov_solve(
+    sys: &KrylovSystem,
+    (a, ilu): (&CsrMatrix, &Ilu0),
+    rhs: &[f64],
+    x: &mut [f64],
+    residual: &mut Vec<f64>,
+    clock: Instant,
+) -> Result<usize, SolveError> {
+    let solved = sys.gmres((a, ilu), rhs, x, residual);
+    sys.count(|s| {
+        s.solves += 1;
+        s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);
+        s.solve_seconds += clock.elapsed().as_secs_f64();
+    });
+    match solved {
+        Ok(solve) => Ok(solve.iterations),
+        Err(LaError::KrylovNotConverged {
+            iterations,
+            rtol,
+            residual,
+            history,
+            ..
+        }) => Err(SolveError::NotConverged(StepFailure {
+            solver: "iterative",
+            loop_name: "GMRES",
+            iterations,
+            criterion: Criterion::LinearResidual,
+            value: residual,
+            tolerance: rtol,
+            residual_history: history,
+        })),
+        Err(other) => Err(other.into()),
+    }
+}
+
+/// w_τ at the contact nodes, node-major in tangent coordinates (`len` values), from x in the
+/// system's order (0 at held coordinates).
+pub(super) fn tangential(nodes: &[NodeRows], td: usize, x: &[f64], len: usize) -> Vec<f64> {
+    let mut w = vec![0.0; len];
+    for (i, node) in nodes.iter().enumerate() {
+        for &(k, row) in &node.tangent {
+            w[i * td + k] = x[row];
+        }
+    }
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::StepMatrix;
+    use crate::Scenario;
+
+    /// The iterative path's A, assembled column by column in its own order, is the direct
+    /// path's S = J A permuted and sign-flipped: the same matrix, entry for entry.
+    #[test]
+    fn the_ordered_assembly_is_the_step_matrix_permuted() {
+        let sets = ["mesh.nx=4".into(), "mesh.ny=2".into(), "mesh.nz=2".into()];
+        let text = include_str!("../../scenarios/paper3d.toml");
+        let problem = Scenario::load(Some(text), &sets).unwrap().build().unwrap();
+        let k = problem.time_step();
+        let system = KrylovSystem::new(&problem, k, KrylovParams::default()).unwrap();
+        let s = StepMatrix::assemble(&problem, k).matrix;
+        let expected = crate::model::rows_of_symmetric_form_ordered(&s, problem.velocity.n_free, &system.order);
+        let (a, _) = &*system.lock();
+        assert!(system.first_contact < a.n() && a.n() == s.n_rows);
+        for i in 0..a.n() {
+            let ((c1, v1), (c2, v2)) = (a.row(i), expected.row(i));
+            assert_eq!(c1, c2, "row {i}");
+            for (x, y) in v1.iter().zip(v2) {
+                assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "row {i}: {x} {y}");
+            }
+        }
+    }
+}

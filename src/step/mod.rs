@@ -1,0 +1,413 @@
+//! One time step: the nonsmooth solvers of Problem 17 over two linear back-ends.
+//!
+//! Depends on: [`crate::model`] (the problem, the state, the step matrix, the norms),
+//! [`crate::la`], [`crate::contact`] (the laws' projections).
+//!
+//! - **Back-ends.** [`direct`]: the step matrix factored once per step size (LDLᵀ) and each
+//!   step condensed onto Γ_C ([`condensed`]); [`iterative`]: the step matrix ordered with its
+//!   Γ_C rows last, ILU(0) (and an AMG correction, [`amg`]), GMRES on all unknowns.
+//! - **The loop.** [`convexification`]: the convexification loop of Problem 17, one function
+//!   generic over its convex-problem solver and its stop test; every solver below runs it.
+//! - **Solvers.** [`paper`] (Uzawa inner iterations on Γ_C) and [`paper_krylov`] (the same on
+//!   the iterative back-end): `kind = "paper"`. [`fast`] (Newton on the condensed law, then the
+//!   loop with descent inner solves, then the descent of [`descent`]) and [`newton_krylov`] (the
+//!   loop with semismooth-Newton inner solves on all unknowns): `kind = "fast"` on the two paths
+//!   ([`select`] says which is which).
+//! - **Figures and failures.** [`StepInfo`] per step, [`StepFailure`] (criterion, value,
+//!   tolerance) where a solver gives up, [`StepError`] for what stops a run.
+
+pub mod amg;
+pub mod condensed;
+pub mod convexification;
+pub mod descent;
+pub mod direct;
+pub mod fast;
+pub mod iterative;
+pub mod newton;
+pub mod newton_krylov;
+pub mod paper;
+pub mod paper_krylov;
+pub mod select;
+
+use serde::{Deserialize, Serialize};
+
+use crate::la::{GmresParams, LaError};
+use crate::model::ModelError;
+
+pub use select::{LinearSystem, StepSolver};
+
+/// What stops a step for good (no cutback helps): the linear algebra or the model's data.
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    /// A factorization or solve of the linear algebra failed.
+    #[error(transparent)]
+    La(#[from] LaError),
+    /// A load or datum could not be evaluated.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+/// Tolerance and caps of a Krylov solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KrylovParams {
+    /// Stop when ‖b − A x‖ ≤ rtol ‖b‖ (the true, unpreconditioned residual).
+    pub rtol: f64,
+    /// Iteration cap (products with A).
+    pub max_iterations: usize,
+    /// GMRES restart length.
+    pub restart: usize,
+    /// ILU(0) alone, or with the AMG coarse correction of the velocities ([`amg`]).
+    pub preconditioner: PreconditionerKind,
+}
+
+/// The preconditioner of the iterative path's GMRES.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PreconditionerKind {
+    /// ILU(0) of the Newton matrix: bounded iterations while the mass term dominates (the
+    /// paper's k), growing like h⁻¹ once the stiffness weighs.
+    #[default]
+    Ilu,
+    /// ILU(0) sweeps around a smoothed-aggregation AMG correction of the velocities (PETSc's
+    /// GAMG; builds with the `petsc` feature): bounded iterations where the stiffness weighs.
+    Amg,
+    /// [`PreconditionerKind::Amg`] where the build has it and ILU(0) needs more than
+    /// [`PreconditionerKind::AUTO_AMG_ABOVE`] Krylov iterations for the first step's system,
+    /// [`PreconditionerKind::Ilu`] otherwise ([`iterative::KrylovSystem::new`]).
+    Auto,
+}
+
+impl PreconditionerKind {
+    /// The ILU(0) Krylov count (first step's system from zero, relative residual 10⁻⁸) above
+    /// which `auto` sets up the AMG. An AMG-preconditioned iteration costs 4–6 ILU(0) ones (two
+    /// sweeps, two products with Ã and PETSc's single-threaded V-cycle), and the warm-started
+    /// Newton solves of a run need fewer iterations than this cold probe, so the AMG pays only
+    /// where ILU(0)'s count is far beyond its own 7–14. Measured on the 3D example at 70k
+    /// unknowns, 4 steps (README, "3D at scale"): at k = 1/8 (probe 19) ILU(0) runs the solves
+    /// in 4.9 s, the AMG in 9.5 s; at k = 1/2 (probe 71) 30.3 s against 30.5 s; at k = 1 (probe
+    /// 146) 39.0 s against 22.6 s.
+    pub const AUTO_AMG_ABOVE: usize = 80;
+
+    /// The name in scenarios and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PreconditionerKind::Ilu => "ilu",
+            PreconditionerKind::Amg => "amg",
+            PreconditionerKind::Auto => "auto",
+        }
+    }
+}
+
+impl Default for KrylovParams {
+    fn default() -> Self {
+        KrylovParams {
+            rtol: 1e-10,
+            max_iterations: 500,
+            restart: 30,
+            preconditioner: PreconditionerKind::Ilu,
+        }
+    }
+}
+
+impl KrylovParams {
+    /// The GMRES settings of these.
+    pub fn gmres(&self) -> GmresParams {
+        GmresParams {
+            rtol: self.rtol,
+            max_iterations: self.max_iterations,
+            restart: self.restart,
+        }
+    }
+}
+
+/// Which nonsmooth solver runs each time step.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverKind {
+    /// Convexification loop + Uzawa augmented Lagrangian (Problem 17).
+    Paper,
+    /// Semismooth Newton on the condensed nonmonotone law, the convexification loop where the
+    /// law is too steep, and a descent on the step's energy where both fail.
+    Fast,
+}
+
+impl SolverKind {
+    /// The name in scenarios and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SolverKind::Paper => "paper",
+            SolverKind::Fast => "fast",
+        }
+    }
+}
+
+/// How the linear systems of a step are solved.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinearKind {
+    /// The LDLᵀ factor of the step matrix, the step condensed onto Γ_C ([`direct`]).
+    Direct,
+    /// GMRES + ILU(0) inside a Newton method on all unknowns, nothing condensed
+    /// ([`newton_krylov`]).
+    Iterative,
+    /// [`LinearKind::Direct`] in 2D and for small 3D problems, iterative beyond
+    /// ([`LinearKind::resolve`]).
+    Auto,
+}
+
+impl LinearKind {
+    /// The name in scenarios and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            LinearKind::Direct => "direct",
+            LinearKind::Iterative => "iterative",
+            LinearKind::Auto => "auto",
+        }
+    }
+
+    /// The share of the machine's memory that `auto` lets the direct path's estimated peak
+    /// take before it takes the iterative path.
+    pub const AUTO_DIRECT_MEMORY_SHARE: f64 = 0.5;
+
+    /// The most unknowns for which `auto` takes the direct path in 3D: where the two paths'
+    /// whole runs cross.
+    pub const AUTO_DIRECT_UNKNOWNS_3D: usize = 70_000;
+
+    /// Direct or iterative for a problem of `dim` dimensions and `unknowns` unknowns solved by
+    /// `kind` on a machine with `memory` bytes. `auto` is direct always in 2D (the factor has
+    /// about 5× A's entries there, and the iterative path pays a Krylov solve per
+    /// convexification iterate: 4.5 s against 1.2 s on the reference run), in 3D up to
+    /// [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns while the estimated peak of the direct path
+    /// ([`crate::resources::estimated_memory`]) is at most half the machine's memory, and
+    /// iterative beyond. Measured on the 3D example, 64 steps, whole runs (direct against
+    /// iterative): 17.6k unknowns 2.1 s against 3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s
+    /// against 30.4 s (and 2.3 GiB against 0.45 GiB); the 3D factor's fill grows like N^{4/3},
+    /// the iterative path's cost per iteration like N. The paper's solver takes the direct path
+    /// wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa iterate
+    /// ([`paper_krylov`]).
+    pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
+        match self {
+            LinearKind::Auto if dim < 3 => LinearKind::Direct,
+            LinearKind::Auto => {
+                let direct = crate::resources::estimated_memory(dim, unknowns as f64);
+                let fits = direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory;
+                if fits && (unknowns <= Self::AUTO_DIRECT_UNKNOWNS_3D || kind == SolverKind::Paper) {
+                    LinearKind::Direct
+                } else {
+                    LinearKind::Iterative
+                }
+            }
+            chosen => chosen,
+        }
+    }
+}
+
+/// The step solver's settings; defaults are the paper's (ε_conv = 1e-6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverParams {
+    /// Which solver.
+    pub kind: SolverKind,
+    /// ε_conv of the stop criteria (77)–(80).
+    pub tolerance: f64,
+    /// Cap on convexification iterations per step.
+    pub max_convexification: usize,
+    /// Relative tolerance of the inner solvers (Uzawa, Newton).
+    pub inner_tolerance: f64,
+    /// Cap on inner Uzawa iterations per convex problem.
+    pub max_inner: usize,
+    /// Cap on sweeps of the fast solver's descent ([`descent`]); 0 switches it off.
+    pub max_sweeps: usize,
+    /// Retry a step that fails as 2, 4, … substeps of k/2, k/4, … ([`crate::time::march`]).
+    pub cutback: bool,
+    /// The deepest cutback: at most 2^depth substeps of k/2^depth.
+    pub max_cutback_depth: usize,
+    /// Direct, iterative, or chosen by size.
+    pub linear: LinearKind,
+    /// Tolerance and caps of the iterative path's Krylov solves.
+    pub krylov: KrylovParams,
+}
+
+impl Default for SolverParams {
+    fn default() -> Self {
+        SolverParams {
+            kind: SolverKind::Fast,
+            tolerance: 1e-6,
+            max_convexification: 200,
+            inner_tolerance: 1e-10,
+            max_inner: 20_000,
+            max_sweeps: 20_000,
+            cutback: true,
+            max_cutback_depth: 5,
+            linear: LinearKind::Auto,
+            krylov: KrylovParams::default(),
+        }
+    }
+}
+
+/// What one time step cost and how it ended.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StepInfo {
+    /// Outer (convexification) iterations.
+    pub convexification_iterations: usize,
+    /// Inner iterations summed over the outer ones: the paper's Uzawa iterations, or the
+    /// descent sweeps of the fast solver's convex subproblems in 3D.
+    pub inner_iterations: usize,
+    /// Last relative increments of u, θ, ξ, ζ: the left sides of (77)–(80) over the right
+    /// sides' norms.
+    pub increments: [f64; 4],
+    /// Semismooth Newton iterations (fast solver).
+    pub newton_iterations: usize,
+    /// The fast solver went through the convexification loop in this step.
+    pub fallback: bool,
+    /// Sweeps of the fast solver's descent (0 where Newton or the convexification loop solved
+    /// the step).
+    pub descent_sweeps: usize,
+    /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
+    pub substeps: usize,
+    /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
+    pub cutback_depth: usize,
+    /// Krylov iterations of the iterative path's linear solves (0 on the direct path).
+    pub krylov_iterations: usize,
+}
+
+impl StepInfo {
+    /// Adds the figures of a substep.
+    pub fn absorb(&mut self, other: &StepInfo) {
+        self.convexification_iterations += other.convexification_iterations;
+        self.inner_iterations += other.inner_iterations;
+        self.newton_iterations += other.newton_iterations;
+        self.increments = other.increments;
+        self.fallback |= other.fallback;
+        self.descent_sweeps += other.descent_sweeps;
+        self.substeps += other.substeps;
+        self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
+        self.krylov_iterations += other.krylov_iterations;
+    }
+}
+
+/// A stop criterion of a step solver, as it is reported when it fails.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Criterion {
+    /// (77): ‖Δu‖_E / ‖u‖_E between convexification iterates.
+    IncrementU,
+    /// (78): ‖Δθ‖_V / ‖θ‖_V.
+    IncrementTheta,
+    /// (79): ‖Δξ‖_{L²(Γ_C)} / ‖ξ‖_{L²(Γ_C)}.
+    IncrementXi,
+    /// (80): ‖Δζ‖_{L²(Γ_C)} / ‖ζ‖_{L²(Γ_C)}.
+    IncrementZeta,
+    /// max |Δw_τ| / max |w_τ| between iterates on Γ_C.
+    IncrementW,
+    /// max |Δξ| / max friction bound between iterates on Γ_C (also the inner Uzawa loop's).
+    IncrementXiNodal,
+    /// max_i |ξ_i − P_{b(|w_i|)}(ξ_i − r w_i)| / min_i b(|w_i|): the nonmonotone friction law
+    /// itself at the nodes.
+    NodalLaw,
+    /// A linear solve of the Newton method gave a non-finite update.
+    NonFiniteUpdate,
+    /// ‖b̃ − Ã x‖ / ‖b̃‖ of a Krylov solve at its iteration cap.
+    LinearResidual,
+}
+
+impl Criterion {
+    /// What the criterion measures, for messages.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Criterion::IncrementU => "relative increment of u (77)",
+            Criterion::IncrementTheta => "relative increment of θ (78)",
+            Criterion::IncrementXi => "relative increment of ξ (79)",
+            Criterion::IncrementZeta => "relative increment of ζ (80)",
+            Criterion::IncrementW => "max |Δw_τ| / max |w_τ|",
+            Criterion::IncrementXiNodal => "max |Δξ| / max friction bound",
+            Criterion::NodalLaw => "nodal friction-law residual / smallest bound",
+            Criterion::NonFiniteUpdate => "non-finite Newton update",
+            Criterion::LinearResidual => "relative residual of the linear solve",
+        }
+    }
+}
+
+/// Why a step solver gave up: the loop, how long it ran, and the criterion that failed with its
+/// value and tolerance (the worst one against its tolerance, never one that passed).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StepFailure {
+    /// `paper` or `fast`.
+    pub solver: &'static str,
+    /// The loop that hit its cap: `convexification`, `inner augmented-Lagrangian`, …
+    pub loop_name: &'static str,
+    pub iterations: usize,
+    pub criterion: Criterion,
+    /// May be +∞ (a relative increment against a zero previous iterate): JSON gets "inf".
+    #[serde(serialize_with = "number_or_text")]
+    pub value: f64,
+    pub tolerance: f64,
+    /// A failed Krylov solve's relative residuals, before its first iteration and after each
+    /// one, as GMRES estimates them (empty for the other loops; not in JSON then).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub residual_history: Vec<f64>,
+}
+
+/// A finite number as a JSON number, ±∞ and NaN (which JSON lacks) as the strings "inf",
+/// "-inf", "NaN".
+fn number_or_text<S: serde::Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    if value.is_finite() {
+        serializer.serialize_f64(*value)
+    } else {
+        serializer.serialize_str(&value.to_string())
+    }
+}
+
+impl std::fmt::Display for StepFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the {} solver's {} loop stopped after {} iterations: {} = {:.3e} > tolerance {:e}",
+            self.solver,
+            self.loop_name,
+            self.iterations,
+            self.criterion.describe(),
+            self.value,
+            self.tolerance
+        )
+    }
+}
+
+/// How one step solve ends when it does not return a state.
+#[derive(Debug)]
+pub enum SolveError {
+    /// The nonsmooth solver did not converge: the time loop may cut the step back.
+    NotConverged(StepFailure),
+    /// Anything else (a load that evaluates to NaN, …): the run stops.
+    Other(StepError),
+}
+
+impl From<StepError> for SolveError {
+    fn from(e: StepError) -> Self {
+        SolveError::Other(e)
+    }
+}
+
+impl From<LaError> for SolveError {
+    fn from(e: LaError) -> Self {
+        SolveError::Other(e.into())
+    }
+}
+
+impl From<ModelError> for SolveError {
+    fn from(e: ModelError) -> Self {
+        SolveError::Other(e.into())
+    }
+}
+
+/// The worst of several (criterion, value, tolerance): the one furthest past its tolerance.
+pub fn worst_criterion(checks: &[(Criterion, f64, f64)]) -> (Criterion, f64, f64) {
+    *checks
+        .iter()
+        .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))
+        .expect("at least one criterion")
+}
+
+/// All of (77)–(80) hold.
+pub fn increments_converged(increments: &[f64; 4], tolerance: f64) -> bool {
+    increments.iter().all(|&r| r <= tolerance)
+}

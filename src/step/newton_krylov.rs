@@ -1,0 +1,336 @@
+//! The Newton–Krylov step solver of the iterative path (`kind = "fast"` there): the
+//! convexification loop of Problem 17 ([`super::convexification`]), each convex problem solved
+//! by semismooth Newton iterations on all unknowns over the back-end of [`super::iterative`].
+//!
+//! **The method: the convexification loop of Problem 17, each convex problem solved by a
+//! semismooth Newton method on (x, ξ).** The unknowns are x = (W_n, Θ_n) and the nodal friction
+//! stresses ξ_i; with the bounds frozen at g_i = b(|w_i|) of the previous convexification
+//! iterate, the convex (Tresca) problem is
+//!
+//! ```text
+//! A x = b + Σ_i ℓ_i ξ_i·t_i + Σ_i ℓ_i h(|w_i|) e_θi        (the step's linear equations)
+//! F_i = ξ_i − P_{g_i}(ξ_i − r_i w_i) = 0                     (the nodal law, Alart–Curnier)
+//! ```
+//!
+//! At a Newton iterate the nodes split as in [`super::newton`]: stick where |ξ_i − r_i w_i| ≤ g_i
+//! (linearized: w_i = 0, and ξ_i is what the node's rows of A x − b leave over), slip otherwise
+//! (linearized: ξ_i = a_i + B_i w_i, substituted into the node's rows as the block −ℓ_i B_i). So
+//! each Newton iteration solves one sparse system Ã x = b̃ whose matrix is A with the tangential
+//! rows of the contact nodes changed, node by node, inside A's pattern. The linear equations
+//! then hold at the new iterate, so the convex problem is solved once its law holds there (to
+//! 1 % of the loop's last change, as the fast solver's inner solves): usually after one Newton
+//! iteration (1 420 Newton iterations for 1 320 convexification iterates on the 3D example).
+//! The frictional heat is taken at the iterate's w (it is weak: α_exp = 3·10⁻⁴ in the paper).
+//! The loop stops when w and ξ on Γ_C change by less than ε_conv and the nonmonotone law holds
+//! at every node to ε_conv: the fast solver's criteria ([`super::fast`]). Where the step has
+//! several solutions this picks the same one as the direct path, the fixed point of the
+//! convexification loop from the previous step (`tests/newton_krylov.rs`: the same fields to
+//! 10⁻⁶ and the same stick/slip state, 2D and 3D).
+//!
+//! Tried and dropped, each measured on the 3D example (40 × 10 × 10, 64 steps):
+//! - one Newton step per bound update (bounds lagged inside Newton): 21 solves per step against
+//!   22, but another solution where the law is steep (one node of 440 on another branch at step
+//!   16, the fields then 0.1–1 % from the direct path's);
+//! - inexact Krylov solves, the tolerance tied to the loop's change (10⁻⁴ … 10⁻¹⁰): the loop
+//!   reached other solutions and failed at step 50 even at k/32;
+//! - Anderson acceleration (depth 5) of the friction bounds between convexification iterates:
+//!   5 033 iterations instead of 1 320, 29 cutbacks, other solutions (the bound map switches
+//!   between stick and slip: it is not smooth);
+//! - giving a step up once the loop stalls (its smallest change over the last 40 iterates not
+//!   half the smallest before), so that a step the loop cannot solve is cut back after ~80
+//!   solves instead of 200+: on the 3D example at 47k unknowns and k = 1/8 the step at k
+//!   cycles (period ≈ 25) through all 200 iterates, but one of its k/2 substeps wanders for 115
+//!   iterates and then converges in 6. Stopping those too cut Newton iterations 345 → 169 and
+//!   raised cutbacks (to k/8, and one more step cut back): 10.9 s → 10.8 s, and other states.
+//!
+//! **Rejected.** Condensing matrix-free (C v by one Krylov solve per product) would cost a solve
+//! per product of the convexification loop's inner iterations (hundreds per step); the fast
+//! solver's descent needs K = C⁻¹, dense. Newton on the nonmonotone law itself (with the slope
+//! b′) converges faster where the law is shallow, but cycles where it is steep (steepness ≥ 1,
+//! the paper's example), the regime this path is for. The descent of the direct path (where the
+//! convexification loop fails) has no counterpart here yet: a step the loop cannot solve is cut
+//! back.
+
+use std::time::Instant;
+
+use super::iterative::{krylov_solve, tangential, KrylovSystem};
+use super::newton::{node_law_residual, slip_linearization};
+use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
+use crate::la::{CsrMatrix, Ilu0};
+use crate::model::{Problem, State};
+
+
+/// How one node is linearized.
+enum Linearized {
+    /// w_i = 0; ξ_i from the node's rows.
+    Stick,
+    /// ξ_i = a + B w_i (in the node's free tangent coordinates).
+    Slip([f64; 2], [[f64; 2]; 2]),
+}
+
+/// Newton iterations per convex problem before its convexification iterate moves on anyway
+/// (the next iterate starts from where this one stopped).
+const MAX_NEWTON_PER_CONVEX_PROBLEM: usize = 20;
+
+/// One step's linear algebra: Ã (A with its contact rows linearized), its ILU(0) and b̃.
+struct Linearization<'s> {
+    system: &'s KrylovSystem,
+    a: &'s mut CsrMatrix,
+    ilu: &'s mut Ilu0,
+    /// b without the contact terms, in the system's order.
+    b: &'s [f64],
+    /// λ(t_n) of h(t_n, r) = λ r.
+    heat_rate: f64,
+    /// d − 1.
+    td: usize,
+    rhs: Vec<f64>,
+    /// b̃ − Ã x after the last solve (empty before the step's first).
+    residual: Vec<f64>,
+    nodes: Vec<Linearized>,
+}
+
+impl Linearization<'_> {
+    /// One Newton iteration of the convex problem with the bounds `frozen`, from (w, ξ) (x the
+    /// unknowns they come from, updated in place): linearize, solve Ã x = b̃ by GMRES from x,
+    /// and return the new (w, ξ).
+    fn newton_iteration(
+        &mut self,
+        x: &mut [f64],
+        w: &[f64],
+        xi: &[f64],
+        frozen: &[f64],
+        info: &mut StepInfo,
+    ) -> Result<(Vec<f64>, Vec<f64>), SolveError> {
+        let sys = self.system;
+        let (td, n) = (self.td, sys.order.len());
+        let a = &mut *self.a;
+        let rhs = &mut self.rhs;
+        rhs.copy_from_slice(self.b);
+        a.values_from_mut(sys.first_contact).copy_from_slice(&sys.base);
+        self.nodes.clear();
+        for (i, node) in sys.nodes.iter().enumerate() {
+            let range = i * td..(i + 1) * td;
+            if let Some(row) = node.theta {
+                rhs[row] += node.weight * self.heat_rate * norm(&w[range.clone()]);
+            }
+            let m = node.tangent.len();
+            let (mut wi, mut xii, mut q) = ([0.0; 2], [0.0; 2], [0.0; 2]);
+            for (j, &(k, _)) in node.tangent.iter().enumerate() {
+                wi[j] = w[range.start + k];
+                xii[j] = xi[range.start + k];
+                q[j] = xii[j] - node.augmentation * wi[j];
+            }
+            let bound = frozen[i];
+            let q_norm = norm(&q[..m]);
+            if q_norm <= bound {
+                for &(_, row) in &node.tangent {
+                    let diagonal = a.row(row).0.binary_search(&(row as u32)).expect("a diagonal entry");
+                    for (p, v) in a.row_values_mut(row).iter_mut().enumerate() {
+                        if p != diagonal {
+                            *v = 0.0;
+                        }
+                    }
+                    rhs[row] = 0.0;
+                }
+                self.nodes.push(Linearized::Stick);
+            } else {
+                let (a_i, b_i) =
+                    slip_linearization(&wi[..m], &xii[..m], &q[..m], q_norm, bound, 0.0, node.augmentation, m);
+                for (j, &(_, row)) in node.tangent.iter().enumerate() {
+                    rhs[row] += node.weight * a_i[j];
+                    for (l, &(_, col)) in node.tangent.iter().enumerate() {
+                        let p = a
+                            .row(row)
+                            .0
+                            .binary_search(&(col as u32))
+                            .expect("a node's tangent unknowns couple");
+                        a.row_values_mut(row)[p] -= node.weight * b_i[j][l];
+                    }
+                }
+                self.nodes.push(Linearized::Slip(a_i, b_i));
+            }
+        }
+        let clock = Instant::now();
+        self.ilu.refactor_from(a, sys.first_contact)?;
+        // The previous solve left r = b̃ − Ã x for this x; only the Γ_C rows and the contact
+        // nodes' temperature rows of Ã and b̃ changed since, so only they are recomputed (a
+        // product with Ã saved per iteration).
+        if self.residual.len() == n {
+            let theta_rows = sys.nodes.iter().filter_map(|node| node.theta);
+            for row in (sys.first_contact..n).chain(theta_rows) {
+                self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
+            }
+        }
+        info.newton_iterations += 1;
+        info.krylov_iterations += krylov_solve(sys, (a, self.ilu), rhs, x, &mut self.residual, clock)?;
+
+        // The new iterate: w from x, ξ from the linearization (slip) or the rows (stick).
+        let new_w = tangential(&sys.nodes, td, x, w.len());
+        let mut new_xi = vec![0.0; xi.len()];
+        for (i, (node, lin)) in sys.nodes.iter().zip(&self.nodes).enumerate() {
+            let start = i * td;
+            match lin {
+                Linearized::Stick => {
+                    // The node's rows of A (not Ã) leave ℓ_i ξ_i over.
+                    for &(k, row) in &node.tangent {
+                        let values = &sys.base[a.offset_from(sys.first_contact, row)];
+                        new_xi[start + k] = (a.row_dot(row, values, x) - self.b[row]) / node.weight;
+                    }
+                }
+                Linearized::Slip(a_i, b_i) => {
+                    for (j, &(k, _)) in node.tangent.iter().enumerate() {
+                        new_xi[start + k] = a_i[j]
+                            + (node.tangent.iter().enumerate())
+                                .map(|(l, &(kl, _))| b_i[j][l] * new_w[start + kl])
+                                .sum::<f64>();
+                    }
+                }
+            }
+        }
+        Ok((new_w, new_xi))
+    }
+}
+
+/// The Newton–Krylov step solver on a [`KrylovSystem`].
+pub struct NewtonKrylov<'a> {
+    problem: &'a Problem,
+    system: KrylovSystem,
+    /// ε_conv.
+    tolerance: f64,
+    /// Cap on Newton iterations per step.
+    max_iterations: usize,
+}
+
+impl<'a> NewtonKrylov<'a> {
+    /// The solver of `problem` on `system`, stopping at `tolerance` (ε_conv) within
+    /// `max_iterations` Newton iterations per step.
+    pub fn new(problem: &'a Problem, system: KrylovSystem, tolerance: f64, max_iterations: usize) -> Self {
+        NewtonKrylov {
+            problem,
+            system,
+            tolerance,
+            max_iterations,
+        }
+    }
+
+    /// The ordered step matrix and its preconditioner.
+    pub fn system(&self) -> &KrylovSystem {
+        &self.system
+    }
+
+    /// One step of the system's size k, from `previous` to the state at time `t`: the
+    /// convexification loop, each convex problem solved by Newton iterations.
+    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
+        let problem = self.problem;
+        let sys = &self.system;
+        let td = problem.dim() - 1;
+        let n = sys.order.len();
+        let clock = Instant::now();
+        let b_unordered = sys.rhs.rhs(problem, previous, t)?;
+        let b: Vec<f64> = sys.order.iter().map(|&o| b_unordered[o]).collect();
+        let x_previous = sys.rhs.unknowns_of(problem, previous);
+        let mut x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
+        sys.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
+
+        let friction = problem.friction.as_ref();
+        let bounds_at = |w: &[f64]| -> Vec<f64> {
+            (0..problem.contact.len())
+                .map(|i| friction.bound(norm(&w[i * td..(i + 1) * td])))
+                .collect()
+        };
+        let mut w = self.tangential(&x);
+        let mut xi = previous.xi.clone();
+        let mut info = StepInfo::default();
+        let mut checks = Vec::new();
+        let mut guard = sys.lock();
+        let (a, ilu) = &mut *guard;
+        let mut solve = Linearization {
+            system: sys,
+            a,
+            ilu,
+            b: &b,
+            heat_rate: problem.heating.heat(t, 1.0),
+            td,
+            rhs: vec![0.0; n],
+            residual: Vec::new(),
+            nodes: Vec::with_capacity(sys.nodes.len()),
+        };
+        // The convex problems are solved to 1 % of the loop's last change (they only need to
+        // be exact once the loop is), never looser than 1e-4 nor tighter than 1e-10.
+        let mut inner_tolerance: f64 = 1e-4;
+        for m in 1..=self.max_iterations {
+            let frozen = bounds_at(&w);
+            let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
+            let (w_outer, xi_outer) = (w.clone(), xi.clone());
+            let mut inner_converged = false;
+            for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
+                (w, xi) = solve.newton_iteration(&mut x, &w, &xi, &frozen, &mut info)?;
+                // The linear equations hold at the new iterate (up to the Krylov tolerance and
+                // the lagged heat), so the convex problem is solved where its law holds: no
+                // second solve to see the update vanish.
+                if self.law_residual(&w, &xi, &frozen) <= inner_tolerance * g_scale {
+                    inner_converged = true;
+                    break;
+                }
+            }
+            info.convexification_iterations = m;
+            let bounds = bounds_at(&w);
+            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+            let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+            let law = self.law_residual(&w, &xi, &bounds);
+            checks = vec![
+                (
+                    Criterion::IncrementW,
+                    max_diff(&w, &w_outer) / w_scale.max(f64::MIN_POSITIVE),
+                    self.tolerance,
+                ),
+                (
+                    Criterion::IncrementXiNodal,
+                    max_diff(&xi, &xi_outer) / g_scale,
+                    self.tolerance,
+                ),
+                (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), self.tolerance),
+            ];
+            let change = checks.iter().fold(0.0f64, |m, c| m.max(c.1));
+            inner_tolerance = (0.01 * change).clamp(1e-10, inner_tolerance);
+            if inner_converged && checks.iter().all(|&(_, value, tol)| value <= tol) {
+                drop(guard);
+                let mut x_unknowns = vec![0.0; n];
+                sys.order.iter().zip(&x).for_each(|(&o, v)| x_unknowns[o] = *v);
+                let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, xi);
+                return Ok((state, info));
+            }
+        }
+        let (criterion, value, tolerance) = worst_criterion(&checks);
+        Err(SolveError::NotConverged(StepFailure {
+            solver: "iterative",
+            loop_name: "convexification",
+            iterations: self.max_iterations,
+            criterion,
+            value,
+            tolerance,
+            residual_history: Vec::new(),
+        }))
+    }
+
+    fn tangential(&self, x: &[f64]) -> Vec<f64> {
+        let td = self.problem.dim() - 1;
+        tangential(&self.system.nodes, td, x, self.problem.contact.len() * td)
+    }
+
+    /// max_i |ξ_i − P_{g_i}(ξ_i − r_i w_i)| (stress units) for the bounds g: with g = b(|w|) the
+    /// nonmonotone law itself.
+    fn law_residual(&self, w: &[f64], xi: &[f64], bounds: &[f64]) -> f64 {
+        let td = self.problem.dim() - 1;
+        (self.system.nodes.iter().enumerate()).fold(0.0, |worst, (i, node)| {
+            let range = i * td..(i + 1) * td;
+            worst.max(node_law_residual(
+                &w[range.clone()],
+                &xi[range],
+                bounds[i],
+                node.augmentation,
+            ))
+        })
+    }
+}

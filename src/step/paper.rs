@@ -1,0 +1,247 @@
+//! The paper's nonsmooth solver (Section 6, Problem 17): a convexification loop around an
+//! augmented-Lagrangian solver of a convex Tresca-type problem.
+//!
+//! Outer loop (m): freeze the friction bound at the previous iterate, g_i = μ(|w_i^(m)|) S, so
+//! that −ξ_i ∈ g_i ∂|w_i| is the subdifferential of a convex function. Stop when the relative
+//! increments (77)–(80) of u (E-norm), θ (V-norm), ξ and ζ (L²(Γ_C)) are all ≤ ε_conv.
+//!
+//! Inner loop: the Uzawa form of the augmented Lagrangian on nodal multipliers,
+//! ξ_i ← P_{g_i}(ξ_i − r w_i(ξ)), where w(ξ) is the tangential velocity of the linear step
+//! problem loaded by ξ and P_g projects onto the ball of radius g. The frictional heat
+//! h_τ(|w^(m+1)|) is updated with the same iterates. The step r is 1/λ_max of the contact
+//! compliance C, which makes the iteration a contraction for stick nodes (r λ ≤ 1 < 2).
+//!
+//! The paper runs this in GetFEM on the full system. Here the inner iterations run on the
+//! condensed contact problem ([`super::condensed`]): w(ξ) = w_free + C ξ + H h is exact (up to
+//! round-off) and costs a dense product on Γ_C instead of a solve; each outer iterate then costs
+//! the full fields that (77)–(80) measure: a forward sweep over the contact block of the factor
+//! and one backward sweep over all of it, half a solve ([`StepSystem::loaded_state`]).
+
+use super::condensed::Condensation;
+use super::direct::StepSystem;
+use crate::model::{contact_tangential, State};
+use crate::model::norms::relative_increments;
+use super::{increments_converged, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use crate::contact::project_to_ball;
+use super::StepError as Error;
+use crate::model::Problem;
+
+/// Settings of the paper's solver.
+#[derive(Debug, Clone, Copy)]
+pub struct PaperParams {
+    /// ε_conv of (77)–(80).
+    pub tolerance: f64,
+    /// Cap on convexification iterations per step.
+    pub max_convexification: usize,
+    /// Relative tolerance of the inner augmented-Lagrangian loop (on ξ, relative to max g).
+    pub inner_tolerance: f64,
+    /// Cap on inner iterations per convex problem.
+    pub max_inner: usize,
+}
+
+/// The convexification + augmented-Lagrangian solver.
+pub struct PaperSolver<'a> {
+    problem: &'a Problem,
+    system: StepSystem,
+    condensation: Condensation,
+    params: PaperParams,
+    /// Augmentation (Uzawa step) parameter r.
+    pub augmentation: f64,
+}
+
+impl<'a> PaperSolver<'a> {
+    /// Sets the solver up: condenses onto Γ_C and picks the augmentation parameter.
+    pub fn new(problem: &'a Problem, system: StepSystem, params: PaperParams) -> Result<Self, Error> {
+        let condensation = Condensation::new(problem, &system)?;
+        let lambda_max = condensation.friction_spectral_bound();
+        let augmentation = if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 };
+        Ok(PaperSolver {
+            problem,
+            system,
+            condensation,
+            params,
+            augmentation,
+        })
+    }
+
+    /// The factored step matrix (of step size k).
+    pub fn system(&self) -> &StepSystem {
+        &self.system
+    }
+
+    /// The condensed compliances on Γ_C.
+    pub fn condensation(&self) -> &Condensation {
+        &self.condensation
+    }
+
+    /// One step of the system's size k, from `previous` to the state at time `t`.
+    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
+        let mut free = self.system.free_step(self.problem, previous, t)?;
+        let w_free = std::mem::take(&mut free.w_free);
+        let mut loaded = CondensedStep {
+            solver: self,
+            previous,
+            t,
+            free,
+            w_free,
+        };
+        let k = self.system.step_size();
+        paper_step(
+            self.problem,
+            &self.params,
+            self.augmentation,
+            "paper",
+            (previous, k, t),
+            &mut loaded,
+        )
+    }
+}
+
+/// The linear step problem as the paper's loop sees it: loaded by the nodal friction stresses
+/// ξ and the frictional heat h on Γ_C, it gives the tangential velocities w(ξ, h) there (node-
+/// major, d − 1 per node, 0 where held), and the full state once the loop accepts (ξ, h). The
+/// direct path answers from the condensed compliances ([`CondensedStep`]), the iterative path
+/// by a Krylov solve of the whole step ([`super::paper_krylov`]).
+pub(super) trait LoadedStep {
+    /// w(ξ, h) on Γ_C.
+    fn velocities(&mut self, xi: &[f64], heat: &[f64], w: &mut [f64]) -> Result<(), SolveError>;
+    /// The full state at (ξ, h).
+    fn state(&mut self, xi: Vec<f64>, heat: &[f64]) -> Result<State, SolveError>;
+}
+
+/// The direct path's answers: w = w_free + C ξ + H h, and the state in half a solve.
+struct CondensedStep<'s, 'a> {
+    solver: &'s PaperSolver<'a>,
+    previous: &'s State,
+    t: f64,
+    free: super::direct::FreeStep,
+    w_free: Vec<f64>,
+}
+
+impl LoadedStep for CondensedStep<'_, '_> {
+    fn velocities(&mut self, xi: &[f64], heat: &[f64], w: &mut [f64]) -> Result<(), SolveError> {
+        self.solver.condensation.velocities(&self.w_free, xi, heat, w);
+        Ok(())
+    }
+
+    fn state(&mut self, xi: Vec<f64>, heat: &[f64]) -> Result<State, SolveError> {
+        let problem = self.solver.problem;
+        Ok(self
+            .solver
+            .system
+            .loaded_state(problem, self.previous, self.t, &mut self.free, xi, heat)?)
+    }
+}
+
+/// The paper's loop (Problem 17) for one step of size k from `previous` to time `t`:
+/// convexification around Uzawa iterations with the augmentation r, on whatever answers the
+/// loaded step.
+pub(super) fn paper_step(
+    problem: &Problem,
+    params: &PaperParams,
+    augmentation: f64,
+    solver: &'static str,
+    (previous, k, t): (&State, f64, f64),
+    step: &mut impl LoadedStep,
+) -> Result<(State, StepInfo), SolveError> {
+    let tangential = problem.dim() - 1;
+    let n_contact = problem.contact.len();
+
+    // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
+    let mut current = previous.clone();
+    current.n = previous.n + 1;
+    current.t = t;
+    current.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
+    let mut xi = previous.xi.clone();
+    let mut w = contact_tangential(problem, &previous.w);
+    let speed = |w: &[f64], i: usize| {
+        w[i * tangential..(i + 1) * tangential]
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+    };
+    let mut heat: Vec<f64> = (0..n_contact).map(|i| problem.heating.heat(t, speed(&w, i))).collect();
+    let mut info = StepInfo::default();
+
+    for m in 0..params.max_convexification {
+        // Problem 17_n^m: the bound frozen at the previous iterate.
+        let bounds: Vec<f64> = (0..n_contact).map(|i| problem.friction.bound(speed(&w, i))).collect();
+        let g_max = bounds.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let mut converged = false;
+        let mut change = f64::INFINITY;
+        for _ in 0..params.max_inner {
+            info.inner_iterations += 1;
+            step.velocities(&xi, &heat, &mut w)?;
+            change = 0.0;
+            for i in 0..n_contact {
+                let range = i * tangential..(i + 1) * tangential;
+                let mut trial = [0.0; 2];
+                for (k, j) in range.clone().enumerate() {
+                    trial[k] = xi[j] - augmentation * w[j];
+                }
+                project_to_ball(&mut trial[..tangential], bounds[i]);
+                for (k, j) in range.enumerate() {
+                    change = change.max((trial[k] - xi[j]).abs());
+                    xi[j] = trial[k];
+                }
+            }
+            let mut heat_change: f64 = 0.0;
+            let mut heat_scale: f64 = 0.0;
+            for (i, h) in heat.iter_mut().enumerate() {
+                let new = problem.heating.heat(t, speed(&w, i));
+                heat_change = heat_change.max((new - *h).abs());
+                heat_scale = heat_scale.max(new.abs());
+                *h = new;
+            }
+            if change <= params.inner_tolerance * g_max && heat_change <= params.inner_tolerance * heat_scale.max(1.0) {
+                converged = true;
+                break;
+            }
+        }
+        if !converged {
+            return Err(SolveError::NotConverged(StepFailure {
+                solver,
+                loop_name: "inner augmented-Lagrangian",
+                iterations: params.max_inner,
+                criterion: Criterion::IncrementXiNodal,
+                value: change / g_max,
+                tolerance: params.inner_tolerance,
+                residual_history: Vec::new(),
+            }));
+        }
+        // The full fields of this iterate with the converged contact terms.
+        step.velocities(&xi, &heat, &mut w)?;
+        let next = step.state(xi.clone(), &heat)?;
+        let increments = relative_increments(problem, &current, &next);
+        info.convexification_iterations = m + 1;
+        info.increments = increments;
+        current = next;
+        if increments_converged(&increments, params.tolerance) {
+            return Ok((current, info));
+        }
+    }
+    let tolerance = params.tolerance;
+    let criteria = [
+        Criterion::IncrementU,
+        Criterion::IncrementTheta,
+        Criterion::IncrementXi,
+        Criterion::IncrementZeta,
+    ];
+    let checks: Vec<(Criterion, f64, f64)> = criteria
+        .into_iter()
+        .zip(info.increments)
+        .map(|(c, v)| (c, v, tolerance))
+        .collect();
+    let (criterion, value, _) = worst_criterion(&checks);
+    Err(SolveError::NotConverged(StepFailure {
+        solver,
+        loop_name: "convexification",
+        iterations: params.max_convexification,
+        criterion,
+        value,
+        tolerance,
+        residual_history: Vec::new(),
+    }))
+}
+
