@@ -7,10 +7,10 @@
 //! 1 300 at 47k and 2 416 at 291k, i.e. about 1 300 (N / 47 000)^{1/3}. A run's peak is about
 //! 18–28 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).
 //! The estimate is for refusing runs that cannot fit, not a promise: within 1.5× of the
-//! measured peaks. The iterative path ([`crate::step::newton_krylov`]) has no fill: its
-//! memory is linear in the unknowns.
-
-use crate::step::LinearKind;
+//! measured peaks. The iterative path (`crate::step::iterative`) has no fill: its memory is
+//! linear in the unknowns.
+//!
+//! Depends on: nothing of this crate (the bottom layer, beside `mesh`).
 
 /// Bytes of peak memory per factor entry (measured: 164 MiB for 6.2 M entries in 2D, 28 bytes;
 /// 1.05 GB for 61 M in 3D with cutback levels, 18 bytes).
@@ -22,13 +22,9 @@ const BYTES_PER_ENTRY: f64 = 24.0;
 /// unknowns, 5.3 kB per unknown.
 const ITERATIVE_BYTES_PER_UNKNOWN: f64 = 5_300.0;
 
-/// Estimated peak memory of a run with `unknowns` unknowns in `dim` dimensions on the linear
-/// path `linear` (direct or iterative, resolved), bytes.
-pub fn estimated_memory_on(dim: usize, unknowns: f64, linear: LinearKind) -> f64 {
-    match linear {
-        LinearKind::Iterative => 32.0 * (1u64 << 20) as f64 + ITERATIVE_BYTES_PER_UNKNOWN * unknowns,
-        _ => estimated_memory(dim, unknowns),
-    }
+/// Estimated peak memory of a run with `unknowns` unknowns on the iterative path, bytes.
+pub fn estimated_memory_iterative(unknowns: f64) -> f64 {
+    32.0 * (1u64 << 20) as f64 + ITERATIVE_BYTES_PER_UNKNOWN * unknowns
 }
 
 /// Estimated peak memory of a run on the direct path with `unknowns` unknowns in `dim`
@@ -62,6 +58,14 @@ pub fn human(bytes: f64) -> String {
     } else {
         format!("{:.0} MiB", bytes / MIB)
     }
+}
+
+/// Peak resident memory of this process so far (Linux: VmHWM), in MiB.
+pub fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
 }
 
 #[cfg(test)]

@@ -196,7 +196,7 @@ impl Setup<'_> {
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: self.factor_nnz,
-            peak_memory_mib: crate::studies::bench::peak_memory_mib(),
+            peak_memory_mib: crate::resources::peak_memory_mib(),
             max_law_residual: tally.max_law_residual,
             cutbacks: tally.cutbacks.clone(),
             status,

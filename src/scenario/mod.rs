@@ -800,7 +800,10 @@ impl Scenario {
         // Without /proc/meminfo, a bound no machine passes.
         let available = crate::resources::machine_memory().unwrap_or(1e15);
         let linear = (self.solver.linear).resolve(d, unknowns as usize, self.solver.kind, available);
-        let needed = crate::resources::estimated_memory_on(d, unknowns, linear);
+        let needed = match linear {
+            LinearKind::Iterative => crate::resources::estimated_memory_iterative(unknowns),
+            _ => crate::resources::estimated_memory(d, unknowns),
+        };
         if needed > available {
             let direct = linear != LinearKind::Iterative;
             return Err(Error::TooLarge {
