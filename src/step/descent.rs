@@ -57,7 +57,6 @@ use crate::contact::FrictionLaw;
 use crate::la::vector::norm2 as norm;
 use crate::la::{FactorStage, LaError as Error};
 
-
 /// Settings of the descent.
 #[derive(Debug, Clone, Copy)]
 pub struct DescentParams {

@@ -11,8 +11,6 @@ use super::StepError as Error;
 use crate::la::{CscMatrix, LaError, QuasiDefiniteLdlt};
 use crate::model::{Problem, State, StepMatrix, StepRhs};
 
-
-
 /// Work done with a [`StepSystem`].
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct SystemStats {

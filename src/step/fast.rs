@@ -19,15 +19,15 @@
 use std::cell::OnceCell;
 
 use super::condensed::Condensation;
+use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::descent::{descend, ContactStiffness, DescentParams, Start};
 use super::direct::StepSystem;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{PaperParams, PaperSolver};
 use super::StepError as Error;
-use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use super::{Criterion, SolveError, StepFailure, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::model::{contact_tangential, Problem, State};
-
 
 /// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`]'s loop and to
 /// the descent.
@@ -238,100 +238,131 @@ impl<'a> FastSolver<'a> {
         }
     }
 
-    /// The convexification loop of Problem 17 on the condensed problem, each convex problem
-    /// solved by semismooth Newton; stops when w and ξ on Γ_C change by less than ε_conv
-    /// (relative to their largest values) and the nonmonotone law holds at every node.
+    /// The convexification loop of Problem 17 ([`convexify`]) on the condensed problem, each
+    /// convex problem solved by the descent (or semismooth Newton); stops when w and ξ on Γ_C
+    /// change by less than ε_conv (relative to their largest values) and the nonmonotone law
+    /// holds at every node.
     fn convexified(
         &self,
         step: &CondensedStep,
         w_free: &[f64],
-        mut w: Vec<f64>,
-        mut xi: Vec<f64>,
+        w: Vec<f64>,
+        xi: Vec<f64>,
         info: &mut StepInfo,
     ) -> Result<NewtonResult, SolveError> {
-        let t = step.tangential;
-        let n_nodes = self.problem.contact.len();
-        let tolerance = self.paper_params.tolerance;
-        let mut checks = Vec::new();
-        // The descent's convex subproblems are solved to 1 % of the loop's last change (they
-        // only need to be exact once the loop is), never looser than 1e-4 nor tighter than the
-        // inner tolerance.
-        let mut inner_tolerance = 1e-4f64.max(self.params.tolerance);
-        for m in 1..=self.paper_params.max_convexification {
-            let bounds: Vec<f64> = (0..n_nodes)
-                .map(|i| self.problem.friction.bound(norm(&w[i * t..(i + 1) * t])))
-                .collect();
-            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
-            let Some(inner) = self
-                .convex_subproblem(step, w_free, (&w, &xi, m > 1), &bounds, inner_tolerance, info)
-                .map_err(SolveError::Other)?
-            else {
-                // The convex subproblem's Newton stalled: report how far the current iterate is
-                // from solving the step (the nonmonotone law at the nodes).
-                return Err(SolveError::NotConverged(StepFailure {
-                    solver: "fast",
-                    loop_name: if t == 1 {
-                        "semismooth Newton (convex subproblem)"
-                    } else {
-                        "descent (convex subproblem)"
-                    },
-                    iterations: self.params.max_iterations,
-                    criterion: Criterion::NodalLaw,
-                    value: step.law_residual(&w, &xi, None) / g_min.max(f64::MIN_POSITIVE),
-                    tolerance,
-                    residual_history: Vec::new(),
-                }));
-            };
-            info.convexification_iterations = m;
-            let dw = max_diff(&inner.w, &w);
-            let dxi = max_diff(&inner.xi, &xi);
-            let w_scale = inner.w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-            let g_scale = bounds.iter().fold(0.0f64, |s, v| s.max(*v));
-            // The frozen bounds lag one iterate behind; also require the nonmonotone law itself
-            // to hold to the tolerance at every node (relative to the smallest bound).
-            let law = step.law_residual(&inner.w, &inner.xi, None);
-            xi = inner.xi;
-            checks = vec![
-                (Criterion::IncrementW, dw / w_scale.max(f64::MIN_POSITIVE), tolerance),
-                (
-                    Criterion::IncrementXiNodal,
-                    dxi / g_scale.max(f64::MIN_POSITIVE),
-                    tolerance,
-                ),
-                (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), tolerance),
-            ];
-            let change = checks.iter().fold(0.0f64, |m, c| m.max(c.1));
-            inner_tolerance = (0.01 * change).clamp(self.params.tolerance, inner_tolerance);
-            if checks.iter().all(|&(_, value, tol)| value <= tol) {
-                // The descent's ξ comes from gradients updated sweep by sweep: accept the state
-                // on a fresh one (E1 exactly), where the law must hold too.
-                if let Some(stiffness) = self.stiffness.get().filter(|_| self.max_sweeps > 0) {
-                    let fresh = stiffness.friction_stress(step, w_free, &inner.w);
-                    let law = step.law_residual(&inner.w, &fresh, None);
-                    if law / g_min.max(f64::MIN_POSITIVE) > tolerance {
-                        w = inner.w;
-                        xi = fresh;
-                        continue;
-                    }
-                    xi = fresh;
-                }
-                return Ok(NewtonResult {
-                    w: inner.w,
-                    xi,
-                    iterations: info.newton_iterations,
-                });
-            }
-            w = inner.w;
-        }
-        let (criterion, value, tolerance) = worst_criterion(&checks);
-        Err(SolveError::NotConverged(StepFailure {
+        let mut subproblem = CondensedConvex {
+            solver: self,
+            step,
+            w_free,
+            g_min: f64::INFINITY,
+        };
+        let params = LoopParams {
             solver: "fast",
-            loop_name: "convexification",
-            iterations: self.paper_params.max_convexification,
-            criterion,
-            value,
-            tolerance,
-            residual_history: Vec::new(),
-        }))
+            max_iterations: self.paper_params.max_convexification,
+            inner: InnerTolerance::Adaptive {
+                floor: self.params.tolerance,
+            },
+        };
+        let iterate = convexify(&mut subproblem, OnContact { w, xi }, &params, info)?;
+        Ok(NewtonResult {
+            w: iterate.w,
+            xi: iterate.xi,
+            iterations: info.newton_iterations,
+        })
+    }
+}
+
+/// An iterate of the fast solver's loop: w_τ and ξ on Γ_C.
+struct OnContact {
+    w: Vec<f64>,
+    xi: Vec<f64>,
+}
+
+/// The convex problems of the fast solver's loop, on the condensed problem.
+struct CondensedConvex<'s, 'a> {
+    solver: &'s FastSolver<'a>,
+    step: &'s CondensedStep<'s>,
+    w_free: &'s [f64],
+    /// The smallest bound frozen at the last iterate.
+    g_min: f64,
+}
+
+impl ConvexSubproblem for CondensedConvex<'_, '_> {
+    type Iterate = OnContact;
+
+    /// The bounds frozen at w, the convex problem by [`FastSolver::convex_subproblem`]; the
+    /// criteria: max |Δw| / max |w|, max |Δξ| / max g, and the nonmonotone law (the frozen
+    /// bounds lag one iterate behind) relative to the smallest bound.
+    fn solve(
+        &mut self,
+        m: usize,
+        iterate: &mut OnContact,
+        inner_tolerance: f64,
+        info: &mut StepInfo,
+    ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
+        let (solver, step) = (self.solver, self.step);
+        let t = step.tangential;
+        let tolerance = solver.paper_params.tolerance;
+        let bounds: Vec<f64> = (0..solver.problem.contact.len())
+            .map(|i| solver.problem.friction.bound(norm(&iterate.w[i * t..(i + 1) * t])))
+            .collect();
+        let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+        self.g_min = g_min;
+        let Some(inner) = solver
+            .convex_subproblem(
+                step,
+                self.w_free,
+                (&iterate.w, &iterate.xi, m > 1),
+                &bounds,
+                inner_tolerance,
+                info,
+            )
+            .map_err(SolveError::Other)?
+        else {
+            // The convex subproblem's solver stalled: report how far the current iterate is
+            // from solving the step (the nonmonotone law at the nodes).
+            return Err(SolveError::NotConverged(StepFailure {
+                solver: "fast",
+                loop_name: if t == 1 {
+                    "semismooth Newton (convex subproblem)"
+                } else {
+                    "descent (convex subproblem)"
+                },
+                iterations: solver.params.max_iterations,
+                criterion: Criterion::NodalLaw,
+                value: step.law_residual(&iterate.w, &iterate.xi, None) / g_min.max(f64::MIN_POSITIVE),
+                tolerance,
+                residual_history: Vec::new(),
+            }));
+        };
+        let dw = max_diff(&inner.w, &iterate.w);
+        let dxi = max_diff(&inner.xi, &iterate.xi);
+        let w_scale = inner.w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let g_scale = bounds.iter().fold(0.0f64, |s, v| s.max(*v));
+        let law = step.law_residual(&inner.w, &inner.xi, None);
+        iterate.w = inner.w;
+        iterate.xi = inner.xi;
+        Ok(vec![
+            (Criterion::IncrementW, dw / w_scale.max(f64::MIN_POSITIVE), tolerance),
+            (
+                Criterion::IncrementXiNodal,
+                dxi / g_scale.max(f64::MIN_POSITIVE),
+                tolerance,
+            ),
+            (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), tolerance),
+        ])
+    }
+
+    /// The descent's ξ comes from gradients updated sweep by sweep: accept the state on a
+    /// fresh one (E1 exactly), where the law must hold too; where it does not, go on from it.
+    fn accept(&mut self, iterate: &mut OnContact) -> bool {
+        let solver = self.solver;
+        let Some(stiffness) = solver.stiffness.get().filter(|_| solver.max_sweeps > 0) else {
+            return true;
+        };
+        let fresh = stiffness.friction_stress(self.step, self.w_free, &iterate.w);
+        let law = self.step.law_residual(&iterate.w, &fresh, None);
+        iterate.xi = fresh;
+        law / self.g_min.max(f64::MIN_POSITIVE) <= solver.paper_params.tolerance
     }
 }

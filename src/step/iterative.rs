@@ -26,9 +26,10 @@ use std::time::Instant;
 use super::amg::VelocityAmg;
 use super::direct::{contact_tangential_unknowns, SystemStats};
 use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, StepFailure};
-use crate::la::{gmres_from_residual, level_bisection, CsrMatrix, FactorStage, Ilu0, LaError, NodeGraph, Part, SolveInfo};
+use crate::la::{
+    gmres_from_residual, level_bisection, CsrMatrix, FactorStage, Ilu0, LaError, NodeGraph, Part, SolveInfo,
+};
 use crate::model::{assemble_by_columns, Problem, State, StepRhs};
-
 
 /// The rows of one contact node in the iterative path's ordering.
 #[derive(Debug, Clone)]

@@ -406,8 +406,3 @@ pub fn worst_criterion(checks: &[(Criterion, f64, f64)]) -> (Criterion, f64, f64
         .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))
         .expect("at least one criterion")
 }
-
-/// All of (77)–(80) hold.
-pub fn increments_converged(increments: &[f64; 4], tolerance: f64) -> bool {
-    increments.iter().all(|&r| r <= tolerance)
-}

@@ -28,8 +28,8 @@ use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
 use super::condensed::Condensation;
-use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::contact::FrictionLaw;
+use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 
 /// Settings of the semismooth Newton method.
 #[derive(Debug, Clone, Copy)]

@@ -53,13 +53,13 @@
 
 use std::time::Instant;
 
+use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::iterative::{krylov_solve, tangential, KrylovSystem};
 use super::newton::{node_law_residual, slip_linearization};
-use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use super::{Criterion, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::la::{CsrMatrix, Ilu0};
 use crate::model::{Problem, State};
-
 
 /// How one node is linearized.
 enum Linearized {
@@ -233,85 +233,45 @@ impl<'a> NewtonKrylov<'a> {
         let mut x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
         sys.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
 
-        let friction = problem.friction.as_ref();
-        let bounds_at = |w: &[f64]| -> Vec<f64> {
-            (0..problem.contact.len())
-                .map(|i| friction.bound(norm(&w[i * td..(i + 1) * td])))
-                .collect()
-        };
-        let mut w = self.tangential(&x);
-        let mut xi = previous.xi.clone();
+        let w = self.tangential(&x);
+        let xi = previous.xi.clone();
         let mut info = StepInfo::default();
-        let mut checks = Vec::new();
         let mut guard = sys.lock();
         let (a, ilu) = &mut *guard;
-        let mut solve = Linearization {
-            system: sys,
-            a,
-            ilu,
-            b: &b,
-            heat_rate: problem.heating.heat(t, 1.0),
-            td,
-            rhs: vec![0.0; n],
-            residual: Vec::new(),
-            nodes: Vec::with_capacity(sys.nodes.len()),
+        let mut newton = SemismoothNewton {
+            solver: self,
+            linearization: Linearization {
+                system: sys,
+                a,
+                ilu,
+                b: &b,
+                heat_rate: problem.heating.heat(t, 1.0),
+                td,
+                rhs: vec![0.0; n],
+                residual: Vec::new(),
+                nodes: Vec::with_capacity(sys.nodes.len()),
+            },
+            inner_converged: false,
         };
-        // The convex problems are solved to 1 % of the loop's last change (they only need to
-        // be exact once the loop is), never looser than 1e-4 nor tighter than 1e-10.
-        let mut inner_tolerance: f64 = 1e-4;
-        for m in 1..=self.max_iterations {
-            let frozen = bounds_at(&w);
-            let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
-            let (w_outer, xi_outer) = (w.clone(), xi.clone());
-            let mut inner_converged = false;
-            for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
-                (w, xi) = solve.newton_iteration(&mut x, &w, &xi, &frozen, &mut info)?;
-                // The linear equations hold at the new iterate (up to the Krylov tolerance and
-                // the lagged heat), so the convex problem is solved where its law holds: no
-                // second solve to see the update vanish.
-                if self.law_residual(&w, &xi, &frozen) <= inner_tolerance * g_scale {
-                    inner_converged = true;
-                    break;
-                }
-            }
-            info.convexification_iterations = m;
-            let bounds = bounds_at(&w);
-            let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
-            let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-            let law = self.law_residual(&w, &xi, &bounds);
-            checks = vec![
-                (
-                    Criterion::IncrementW,
-                    max_diff(&w, &w_outer) / w_scale.max(f64::MIN_POSITIVE),
-                    self.tolerance,
-                ),
-                (
-                    Criterion::IncrementXiNodal,
-                    max_diff(&xi, &xi_outer) / g_scale,
-                    self.tolerance,
-                ),
-                (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), self.tolerance),
-            ];
-            let change = checks.iter().fold(0.0f64, |m, c| m.max(c.1));
-            inner_tolerance = (0.01 * change).clamp(1e-10, inner_tolerance);
-            if inner_converged && checks.iter().all(|&(_, value, tol)| value <= tol) {
-                drop(guard);
-                let mut x_unknowns = vec![0.0; n];
-                sys.order.iter().zip(&x).for_each(|(&o, v)| x_unknowns[o] = *v);
-                let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, xi);
-                return Ok((state, info));
-            }
-        }
-        let (criterion, value, tolerance) = worst_criterion(&checks);
-        Err(SolveError::NotConverged(StepFailure {
+        let params = LoopParams {
             solver: "iterative",
-            loop_name: "convexification",
-            iterations: self.max_iterations,
-            criterion,
-            value,
-            tolerance,
-            residual_history: Vec::new(),
-        }))
+            max_iterations: self.max_iterations,
+            inner: InnerTolerance::Adaptive { floor: 1e-10 },
+        };
+        let iterate = convexify(&mut newton, AllUnknowns { x, w, xi }, &params, &mut info)?;
+        drop(guard);
+        let mut x_unknowns = vec![0.0; n];
+        sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);
+        let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, iterate.xi);
+        Ok((state, info))
+    }
+
+    /// The friction bounds b(|w_i|) at the contact nodes.
+    fn bounds_at(&self, w: &[f64]) -> Vec<f64> {
+        let td = self.problem.dim() - 1;
+        (0..self.problem.contact.len())
+            .map(|i| self.problem.friction.bound(norm(&w[i * td..(i + 1) * td])))
+            .collect()
     }
 
     fn tangential(&self, x: &[f64]) -> Vec<f64> {
@@ -332,5 +292,81 @@ impl<'a> NewtonKrylov<'a> {
                 node.augmentation,
             ))
         })
+    }
+}
+
+/// An iterate of the Newton–Krylov loop: all unknowns (in the system's order), and w_τ, ξ on
+/// Γ_C.
+struct AllUnknowns {
+    x: Vec<f64>,
+    w: Vec<f64>,
+    xi: Vec<f64>,
+}
+
+/// The convex problems of the Newton–Krylov loop, solved by semismooth Newton iterations.
+struct SemismoothNewton<'s, 'a> {
+    solver: &'s NewtonKrylov<'a>,
+    linearization: Linearization<'s>,
+    /// Whether the last convex problem's law held within its Newton iterations.
+    inner_converged: bool,
+}
+
+impl ConvexSubproblem for SemismoothNewton<'_, '_> {
+    type Iterate = AllUnknowns;
+
+    /// Newton iterations with the bounds frozen at w, until the convex problem's law holds
+    /// to `inner_tolerance` (relative to the largest bound) or
+    /// [`MAX_NEWTON_PER_CONVEX_PROBLEM`] of them; the criteria: max |Δw| / max |w|,
+    /// max |Δξ| / max g, and the nonmonotone law relative to the smallest bound.
+    fn solve(
+        &mut self,
+        _m: usize,
+        iterate: &mut AllUnknowns,
+        inner_tolerance: f64,
+        info: &mut StepInfo,
+    ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
+        let solver = self.solver;
+        let frozen = solver.bounds_at(&iterate.w);
+        let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
+        let (w_outer, xi_outer) = (iterate.w.clone(), iterate.xi.clone());
+        self.inner_converged = false;
+        for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
+            let AllUnknowns { x, w, xi } = iterate;
+            (*w, *xi) = self.linearization.newton_iteration(x, w, xi, &frozen, info)?;
+            // The linear equations hold at the new iterate (up to the Krylov tolerance and
+            // the lagged heat), so the convex problem is solved where its law holds: no
+            // second solve to see the update vanish.
+            if solver.law_residual(w, xi, &frozen) <= inner_tolerance * g_scale {
+                self.inner_converged = true;
+                break;
+            }
+        }
+        let (w, xi) = (&iterate.w, &iterate.xi);
+        let bounds = solver.bounds_at(w);
+        let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+        let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let law = solver.law_residual(w, xi, &bounds);
+        Ok(vec![
+            (
+                Criterion::IncrementW,
+                max_diff(w, &w_outer) / w_scale.max(f64::MIN_POSITIVE),
+                solver.tolerance,
+            ),
+            (
+                Criterion::IncrementXiNodal,
+                max_diff(xi, &xi_outer) / g_scale,
+                solver.tolerance,
+            ),
+            (
+                Criterion::NodalLaw,
+                law / g_min.max(f64::MIN_POSITIVE),
+                solver.tolerance,
+            ),
+        ])
+    }
+
+    /// A converged loop needs its last convex problem solved too.
+    fn accept(&mut self, _iterate: &mut AllUnknowns) -> bool {
+        self.inner_converged
     }
 }

@@ -18,13 +18,14 @@
 //! and one backward sweep over all of it, half a solve ([`StepSystem::loaded_state`]).
 
 use super::condensed::Condensation;
+use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::direct::StepSystem;
-use crate::model::{contact_tangential, State};
-use crate::model::norms::relative_increments;
-use super::{increments_converged, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
-use crate::contact::project_to_ball;
 use super::StepError as Error;
+use super::{Criterion, SolveError, StepFailure, StepInfo};
+use crate::contact::project_to_ball;
+use crate::model::norms::relative_increments;
 use crate::model::Problem;
+use crate::model::{contact_tangential, State};
 
 /// Settings of the paper's solver.
 #[derive(Debug, Clone, Copy)]
@@ -134,8 +135,8 @@ impl LoadedStep for CondensedStep<'_, '_> {
 }
 
 /// The paper's loop (Problem 17) for one step of size k from `previous` to time `t`:
-/// convexification around Uzawa iterations with the augmentation r, on whatever answers the
-/// loaded step.
+/// convexification ([`convexify`]) around Uzawa iterations with the augmentation r, on
+/// whatever answers the loaded step.
 pub(super) fn paper_step(
     problem: &Problem,
     params: &PaperParams,
@@ -144,41 +145,100 @@ pub(super) fn paper_step(
     (previous, k, t): (&State, f64, f64),
     step: &mut impl LoadedStep,
 ) -> Result<(State, StepInfo), SolveError> {
-    let tangential = problem.dim() - 1;
-    let n_contact = problem.contact.len();
-
     // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
-    let mut current = previous.clone();
-    current.n = previous.n + 1;
-    current.t = t;
-    current.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
-    let mut xi = previous.xi.clone();
-    let mut w = contact_tangential(problem, &previous.w);
-    let speed = |w: &[f64], i: usize| {
-        w[i * tangential..(i + 1) * tangential]
-            .iter()
-            .map(|v| v * v)
-            .sum::<f64>()
-            .sqrt()
+    let mut state = previous.clone();
+    state.n = previous.n + 1;
+    state.t = t;
+    state.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
+    let w = contact_tangential(problem, &previous.w);
+    let tangential = problem.dim() - 1;
+    let heat: Vec<f64> = (0..problem.contact.len())
+        .map(|i| problem.heating.heat(t, speed(&w, i, tangential)))
+        .collect();
+    let iterate = PaperIterate {
+        state,
+        xi: previous.xi.clone(),
+        w,
+        heat,
     };
-    let mut heat: Vec<f64> = (0..n_contact).map(|i| problem.heating.heat(t, speed(&w, i))).collect();
+    let mut uzawa = Uzawa {
+        problem,
+        params,
+        augmentation,
+        solver,
+        t,
+        step,
+    };
+    let loop_params = LoopParams {
+        solver,
+        max_iterations: params.max_convexification,
+        inner: InnerTolerance::Fixed(params.inner_tolerance),
+    };
     let mut info = StepInfo::default();
+    let iterate = convexify(&mut uzawa, iterate, &loop_params, &mut info)?;
+    Ok((iterate.state, info))
+}
 
-    for m in 0..params.max_convexification {
+/// |w_i| of node i's tangent coordinates in `w` (node-major, `tangential` per node).
+fn speed(w: &[f64], i: usize, tangential: usize) -> f64 {
+    w[i * tangential..(i + 1) * tangential]
+        .iter()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// An iterate of the paper's loop: the full fields, and ξ, w_τ and h on Γ_C.
+struct PaperIterate {
+    state: State,
+    xi: Vec<f64>,
+    w: Vec<f64>,
+    heat: Vec<f64>,
+}
+
+/// The convex problems of the paper's loop, solved by Uzawa iterations on ξ over a loaded step.
+struct Uzawa<'p, S> {
+    problem: &'p Problem,
+    params: &'p PaperParams,
+    augmentation: f64,
+    solver: &'static str,
+    t: f64,
+    step: &'p mut S,
+}
+
+impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
+    type Iterate = PaperIterate;
+
+    /// The Uzawa form of the augmented Lagrangian, ξ_i ← P_{g_i}(ξ_i − r w_i(ξ)), with the
+    /// frictional heat updated from the same iterates, then the full fields; the criteria are
+    /// (77)–(80).
+    fn solve(
+        &mut self,
+        _m: usize,
+        iterate: &mut PaperIterate,
+        inner_tolerance: f64,
+        info: &mut StepInfo,
+    ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
+        let (problem, t) = (self.problem, self.t);
+        let tangential = problem.dim() - 1;
+        let n_contact = problem.contact.len();
+        let PaperIterate { state, xi, w, heat } = iterate;
         // Problem 17_n^m: the bound frozen at the previous iterate.
-        let bounds: Vec<f64> = (0..n_contact).map(|i| problem.friction.bound(speed(&w, i))).collect();
+        let bounds: Vec<f64> = (0..n_contact)
+            .map(|i| problem.friction.bound(speed(w, i, tangential)))
+            .collect();
         let g_max = bounds.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
         let mut converged = false;
         let mut change = f64::INFINITY;
-        for _ in 0..params.max_inner {
+        for _ in 0..self.params.max_inner {
             info.inner_iterations += 1;
-            step.velocities(&xi, &heat, &mut w)?;
+            self.step.velocities(xi, heat, w)?;
             change = 0.0;
             for i in 0..n_contact {
                 let range = i * tangential..(i + 1) * tangential;
                 let mut trial = [0.0; 2];
                 for (k, j) in range.clone().enumerate() {
-                    trial[k] = xi[j] - augmentation * w[j];
+                    trial[k] = xi[j] - self.augmentation * w[j];
                 }
                 project_to_ball(&mut trial[..tangential], bounds[i]);
                 for (k, j) in range.enumerate() {
@@ -189,59 +249,43 @@ pub(super) fn paper_step(
             let mut heat_change: f64 = 0.0;
             let mut heat_scale: f64 = 0.0;
             for (i, h) in heat.iter_mut().enumerate() {
-                let new = problem.heating.heat(t, speed(&w, i));
+                let new = problem.heating.heat(t, speed(w, i, tangential));
                 heat_change = heat_change.max((new - *h).abs());
                 heat_scale = heat_scale.max(new.abs());
                 *h = new;
             }
-            if change <= params.inner_tolerance * g_max && heat_change <= params.inner_tolerance * heat_scale.max(1.0) {
+            if change <= inner_tolerance * g_max && heat_change <= inner_tolerance * heat_scale.max(1.0) {
                 converged = true;
                 break;
             }
         }
         if !converged {
             return Err(SolveError::NotConverged(StepFailure {
-                solver,
+                solver: self.solver,
                 loop_name: "inner augmented-Lagrangian",
-                iterations: params.max_inner,
+                iterations: self.params.max_inner,
                 criterion: Criterion::IncrementXiNodal,
                 value: change / g_max,
-                tolerance: params.inner_tolerance,
+                tolerance: inner_tolerance,
                 residual_history: Vec::new(),
             }));
         }
         // The full fields of this iterate with the converged contact terms.
-        step.velocities(&xi, &heat, &mut w)?;
-        let next = step.state(xi.clone(), &heat)?;
-        let increments = relative_increments(problem, &current, &next);
-        info.convexification_iterations = m + 1;
+        self.step.velocities(xi, heat, w)?;
+        let next = self.step.state(xi.clone(), heat)?;
+        let increments = relative_increments(problem, state, &next);
         info.increments = increments;
-        current = next;
-        if increments_converged(&increments, params.tolerance) {
-            return Ok((current, info));
-        }
+        *state = next;
+        let criteria = [
+            Criterion::IncrementU,
+            Criterion::IncrementTheta,
+            Criterion::IncrementXi,
+            Criterion::IncrementZeta,
+        ];
+        Ok(criteria
+            .into_iter()
+            .zip(increments)
+            .map(|(c, v)| (c, v, self.params.tolerance))
+            .collect())
     }
-    let tolerance = params.tolerance;
-    let criteria = [
-        Criterion::IncrementU,
-        Criterion::IncrementTheta,
-        Criterion::IncrementXi,
-        Criterion::IncrementZeta,
-    ];
-    let checks: Vec<(Criterion, f64, f64)> = criteria
-        .into_iter()
-        .zip(info.increments)
-        .map(|(c, v)| (c, v, tolerance))
-        .collect();
-    let (criterion, value, _) = worst_criterion(&checks);
-    Err(SolveError::NotConverged(StepFailure {
-        solver,
-        loop_name: "convexification",
-        iterations: params.max_convexification,
-        criterion,
-        value,
-        tolerance,
-        residual_history: Vec::new(),
-    }))
 }
-

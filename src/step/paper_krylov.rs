@@ -15,14 +15,14 @@
 
 use std::time::Instant;
 
-use crate::la::vector::largest_eigenvalue;
-use crate::la::{CsrMatrix, Ilu0};
 use super::iterative::{krylov_solve, tangential, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
-use crate::model::State;
-use super::{SolveError, StepInfo};
 use super::StepError as Error;
+use super::{SolveError, StepInfo};
+use crate::la::vector::largest_eigenvalue;
+use crate::la::{CsrMatrix, Ilu0};
 use crate::model::Problem;
+use crate::model::State;
 
 /// The paper's solver on a [`KrylovSystem`].
 pub struct PaperKrylov<'a> {

@@ -176,4 +176,3 @@ enum SystemRef<'s> {
     Direct(&'s StepSystem),
     Iterative(&'s KrylovSystem),
 }
-
