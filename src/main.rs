@@ -16,9 +16,9 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use thermocontact::driver::{self, RunOptions, StopFlag, Summary};
+use thermocontact::scenario::{Scenario, DEFAULT_TOML};
 use thermocontact::studies::reproduction::study::{self, StudyPlan};
 use thermocontact::studies::reproduction::{self as repro, FigureOptions, FiguresMade};
-use thermocontact::scenario::{Scenario, DEFAULT_TOML};
 use thermocontact::studies::verification::{self, study::LevelRun};
 use thermocontact::Interruption;
 
@@ -240,8 +240,12 @@ fn main() -> ExitCode {
     match execute(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", chain(&e));
-            match e.downcast_ref::<thermocontact::Error>() {
+            let error = e.downcast_ref::<thermocontact::Error>();
+            match error.and_then(thermocontact::scenario::keys_behind) {
+                Some(keys) => eprintln!("error: {}. {keys}", chain(&e)),
+                None => eprintln!("error: {}", chain(&e)),
+            }
+            match error {
                 // 130 / 143, as the shell reports a process ended by SIGINT / SIGTERM.
                 Some(thermocontact::Error::Interrupted { cause, .. }) => ExitCode::from(cause.exit_code()),
                 _ => ExitCode::FAILURE,

@@ -5,10 +5,10 @@
 #![cfg(feature = "petsc")]
 
 use thermocontact::la::SolveInfo;
-use thermocontact::step::{KrylovParams, PreconditionerKind};
-use thermocontact::step::iterative::KrylovSystem;
 use thermocontact::model::State;
 use thermocontact::step::direct::StepSystem;
+use thermocontact::step::iterative::KrylovSystem;
+use thermocontact::step::{KrylovParams, PreconditionerKind};
 use thermocontact::Scenario;
 
 const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");

@@ -11,9 +11,9 @@
 use std::process::Command;
 
 use thermocontact::model::contact_rows;
-use thermocontact::time;
 use thermocontact::studies::verification::manufactured::Manufactured;
 use thermocontact::studies::verification::study::{self, LevelRun, StudyReport};
+use thermocontact::time;
 use thermocontact::Scenario;
 
 fn quiet(_: &LevelRun) {}

@@ -6,10 +6,10 @@ mod common;
 use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
 use thermocontact::loads::Datum;
 use thermocontact::mesh::{self, Mesh};
-use thermocontact::model::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
-use thermocontact::model::State;
-use thermocontact::step::{SolverKind, SolverParams};
 use thermocontact::model::contact_rows;
+use thermocontact::model::State;
+use thermocontact::model::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
+use thermocontact::step::{SolverKind, SolverParams};
 
 type Rotation = [[f64; 3]; 3];
 

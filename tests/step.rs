@@ -3,12 +3,12 @@
 
 use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::law_residual;
-use thermocontact::step::condensed::Condensation;
-use thermocontact::model::State;
-use thermocontact::step::direct::{add_contact_terms, tangential_velocities, StepSystem};
 use thermocontact::la::LaError;
-use thermocontact::step::{Criterion, SolveError, StepError};
 use thermocontact::model::contact_rows;
+use thermocontact::model::State;
+use thermocontact::step::condensed::Condensation;
+use thermocontact::step::direct::{add_contact_terms, tangential_velocities, StepSystem};
+use thermocontact::step::{Criterion, SolveError, StepError};
 use thermocontact::step::{LinearSystem, StepSolver};
 use thermocontact::Scenario;
 

@@ -11,9 +11,9 @@ use std::process::Command;
 use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, SlipWeakening};
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{cuboid, Mesh};
+use thermocontact::model::contact_rows;
 use thermocontact::model::State;
 use thermocontact::step::direct::StepSystem;
-use thermocontact::model::contact_rows;
 use thermocontact::step::{LinearSystem, StepSolver};
 use thermocontact::Scenario;
 

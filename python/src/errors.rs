@@ -8,6 +8,8 @@
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
+use thermocontact::model::ModelError;
+use thermocontact::time::TimeError;
 use thermocontact::Error;
 
 /// The exception classes, by name, once the module is initialized.
@@ -93,27 +95,25 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
         | Error::RemovedKey { .. }
         | Error::MissingKey { .. }
         | Error::InvalidValue { .. }
-        | Error::UnknownPart { .. }
-        | Error::LoadOffNeumann { .. }
-        | Error::InitialNotAdmissible { .. }
-        | Error::PartsShareFacets { .. }
-        | Error::CurvedSymmetryPart { .. }
-        | Error::InitialFieldSizes { .. }
         | Error::TooLarge { .. }
         | Error::Load(_)
+        | Error::Model(ModelError::Load(_))
         | Error::Scenario(_) => "ScenarioError",
-        Error::Mesh(_) => "MeshError",
-        Error::NotConverged { .. }
-        | Error::KrylovNotConverged { .. }
-        | Error::Factorization { .. }
-        | Error::NonFiniteSolution { .. } => "SolverError",
+        Error::Mesh(_) | Error::Model(ModelError::Mesh(_)) => "MeshError",
+        Error::Model(_) => "ScenarioError",
+        Error::Time(_) | Error::Step(_) => "SolverError",
         Error::Output(_) | Error::Read { .. } | Error::Folder(_) | Error::Checkpoint(_) => "FileError",
         Error::Interrupted { .. } => "Interrupted",
         // A variant added to the core later: the base class, with its message.
         #[allow(unreachable_patterns)]
         _ => "Error",
     };
-    let exception = class(py, name)?.call1((error.to_string(),))?;
+    // The scenario layer names the keys behind a failure of the step matrix, as the CLI does.
+    let message = match thermocontact::scenario::keys_behind(error) {
+        Some(keys) => format!("{error}. {keys}"),
+        None => error.to_string(),
+    };
+    let exception = class(py, name)?.call1((message,))?;
     let set = |attribute: &str, value: Bound<'_, PyAny>| exception.setattr(attribute, value);
     let none = || py.None().into_bound(py);
     // Every instance has the attributes of its class, None where the variant has no value.
@@ -132,12 +132,12 @@ fn build(py: Python<'_>, error: &Error) -> PyResult<PyErr> {
         }
         "SolverError" => {
             let (step, time, depth) = match error {
-                Error::NotConverged {
+                Error::Time(TimeError::NotConverged {
                     step,
                     time,
                     cutback_depth,
                     ..
-                } => (Some(*step), Some(*time), Some(*cutback_depth)),
+                }) => (Some(*step), Some(*time), Some(*cutback_depth)),
                 _ => (None, None, None),
             };
             set("step", step.into_pyobject(py)?.into_any())?;

@@ -22,9 +22,10 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList};
 use thermocontact::driver::{self, contact_csv_header, contact_csv_rows, OutputPlan, RunOptions, StopFlag};
 use thermocontact::output::fields;
-use thermocontact::solver::system::State;
-use thermocontact::solver::{SolverParams, StepInfo};
-use thermocontact::time::{self, contact_rows, ContactRow, Levels};
+use thermocontact::model::State;
+use thermocontact::step::{SolverParams, StepInfo};
+use thermocontact::model::{contact_rows, ContactRow};
+use thermocontact::time::{self, Levels};
 use thermocontact::{Error, Interruption, Problem, Scenario};
 
 use crate::errors;
@@ -622,7 +623,7 @@ impl PySteps {
             };
             let levels = match Levels::build(problem, &params) {
                 Ok(levels) => levels,
-                Err(error) => return fail(error, 0, 0.0, &sender),
+                Err(error) => return fail(error.into(), 0, 0.0, &sender),
             };
             let marched = time::march(problem, &levels, |state, info| {
                 sender.send(Ok((state.clone(), *info))).map_err(|_| Error::Interrupted {

@@ -5,9 +5,9 @@
 use rayon::prelude::*;
 
 use super::kernels;
-use crate::mesh::simplex::{facet_measure, Simplex};
 use crate::la::{ColumnsMut, CscMatrix, NodeGraph};
 use crate::material::{Isotropic, Material};
+use crate::mesh::simplex::{facet_measure, Simplex};
 use crate::mesh::Mesh;
 
 /// The P1 matrices of docs/model.md §2 on full nodal dofs.

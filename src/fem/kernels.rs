@@ -3,8 +3,8 @@
 //! Local vector dofs are ordered node-major: (a, i) ↦ a·d + i for node a ≤ d and component
 //! i < d. All integrands are polynomials integrated exactly.
 
-use crate::mesh::simplex::Simplex;
 use crate::material::Isotropic;
+use crate::mesh::simplex::Simplex;
 
 /// ∫_T λ_a λ_b = |T| (1 + δ_ab) / ((d + 1)(d + 2)): the consistent scalar mass.
 pub fn scalar_mass(t: &Simplex) -> [[f64; 4]; 4] {

@@ -40,10 +40,7 @@ pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 /// The largest eigenvalue in modulus of the n × n operator `apply` (y = C v), by power
 /// iteration from a fixed start, stopping when the estimate settles to 10⁻⁶ or after 200
 /// products.
-pub fn largest_eigenvalue<E>(
-    n: usize,
-    mut apply: impl FnMut(&[f64], &mut [f64]) -> Result<(), E>,
-) -> Result<f64, E> {
+pub fn largest_eigenvalue<E>(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]) -> Result<(), E>) -> Result<f64, E> {
     if n == 0 {
         return Ok(0.0);
     }

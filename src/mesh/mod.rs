@@ -12,12 +12,12 @@
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 
-pub mod simplex;
 mod annulus;
 pub mod chains;
 mod check;
 mod cuboid;
 mod gmsh;
+pub mod simplex;
 mod structured;
 pub(crate) mod topology;
 

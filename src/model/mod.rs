@@ -22,4 +22,6 @@ pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
 pub use problem::*;
 pub use state::State;
-pub use step_matrix::{assemble_by_columns, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs};
+pub use step_matrix::{
+    assemble_by_columns, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
+};

@@ -4,9 +4,9 @@
 //! nodal fields ξ and ζ use the same nodal quadrature as the contact terms:
 //! ‖ξ‖²_L²(ΓC) ≈ Σ_i ℓ_i |ξ_i|².
 
-use crate::fem::assembly::Matrices;
 use super::problem::Problem;
 use super::state::State;
+use crate::fem::assembly::Matrices;
 
 /// ‖ε(v)‖_L² of a full nodal vector field.
 pub fn energy(matrices: &Matrices, v: &[f64]) -> f64 {
@@ -68,9 +68,6 @@ pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64;
         ratio(du, energy(m, &old.u)),
         ratio(dtheta, gradient(m, &old.theta)),
         ratio(dxi, contact_l2(problem, &old.xi)),
-        ratio(
-            contact_l2(problem, &zeta_diff),
-            contact_l2(problem, &zeta_ref),
-        ),
+        ratio(contact_l2(problem, &zeta_diff), contact_l2(problem, &zeta_ref)),
     ]
 }

@@ -34,9 +34,9 @@
 //! assert_eq!(problem.contact.len(), 16);
 //! ```
 
+use super::error::ModelError as Error;
 use crate::contact::frames::{contact_frames, orthogonal_complement};
 use crate::contact::{FrictionLaw, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange, Tresca};
-use super::error::ModelError as Error;
 use crate::fem::assembly::{self, Matrices};
 use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
 use crate::loads::{nodal_values, Datum, Load, LoadKind};

@@ -14,8 +14,8 @@
 //! quasi-definite.
 
 use super::error::ModelError as Error;
-use crate::la::{CscMatrix, CsrMatrix};
 use super::problem::Problem;
+use crate::la::{CscMatrix, CsrMatrix};
 
 use super::state::State;
 

@@ -2,9 +2,9 @@
 //! its von Mises norm, and the contact status and friction stress per node.
 
 use crate::mesh::simplex::Simplex;
+use crate::model::ContactRow;
 use crate::model::Problem;
 use crate::model::State;
-use crate::model::ContactRow;
 
 /// The symmetric-tensor components written per cell, in VTK's order for 6-component arrays
 /// (xx, yy, zz, xy, yz, xz), which ParaView reads as a symmetric tensor, in 2D as in 3D.

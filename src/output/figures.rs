@@ -23,9 +23,9 @@ use plotters::prelude::*;
 
 use crate::mesh::chains::{self, Chain};
 use crate::mesh::Mesh;
+use crate::model::ContactRow;
 use crate::output::plot::{ensure_fonts, FONT};
 use crate::output::{write_atomic, OutputError};
-use crate::model::ContactRow;
 
 /// Errors of figure making.
 #[derive(Debug, thiserror::Error)]

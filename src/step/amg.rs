@@ -312,9 +312,7 @@ mod tests {
     /// all six modes survive the constraints, orthonormal.
     #[test]
     fn six_orthonormal_rigid_body_modes_in_3d() {
-        let sets = ["mesh.nx=4".into(), "mesh.ny=2".into(), "mesh.nz=2".into()];
-        let text = include_str!("../../scenarios/paper3d.toml");
-        let problem = crate::Scenario::load(Some(text), &sets).unwrap().build().unwrap();
+        let problem = crate::model::samples::paper_3d([4, 2, 2], 64).unwrap();
         let modes = rigid_body_modes(&problem, &padded_slots(&problem).unwrap());
         assert_eq!(modes.len(), 6);
         for (i, a) in modes.iter().enumerate() {

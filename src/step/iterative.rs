@@ -333,15 +333,12 @@ pub(super) fn tangential(nodes: &[NodeRows], td: usize, x: &[f64], len: usize) -
 mod tests {
     use super::*;
     use crate::model::StepMatrix;
-    use crate::Scenario;
 
     /// The iterative path's A, assembled column by column in its own order, is the direct
     /// path's S = J A permuted and sign-flipped: the same matrix, entry for entry.
     #[test]
     fn the_ordered_assembly_is_the_step_matrix_permuted() {
-        let sets = ["mesh.nx=4".into(), "mesh.ny=2".into(), "mesh.nz=2".into()];
-        let text = include_str!("../../scenarios/paper3d.toml");
-        let problem = Scenario::load(Some(text), &sets).unwrap().build().unwrap();
+        let problem = crate::model::samples::paper_3d([4, 2, 2], 64).unwrap();
         let k = problem.time_step();
         let system = KrylovSystem::new(&problem, k, KrylovParams::default()).unwrap();
         let s = StepMatrix::assemble(&problem, k).matrix;

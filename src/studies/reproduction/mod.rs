@@ -20,14 +20,14 @@ use serde::Serialize;
 use crate::driver::{self, record, OutputRecord, RunOptions, Summary};
 use crate::error::Error;
 use crate::mesh::chains;
+use crate::model::contact_rows;
+use crate::model::Problem;
+use crate::model::State;
 use crate::output::figures::{
     self, format_number, ContactProfileFigure, DeformedFigure, FigureError, HistorySeries, Panel, SlipHistoryFigure,
 };
 use crate::output::{write_atomic, OutputError};
-use crate::model::Problem;
 use crate::scenario::Scenario;
-use crate::model::State;
-use crate::model::contact_rows;
 
 /// A slip count the paper reports: at time `t` with α_exp = `expansion`, `slip_nodes` slip.
 #[derive(Debug, Clone, Copy, Serialize)]

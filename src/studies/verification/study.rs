@@ -29,11 +29,11 @@ use super::errors::{discrete_errors, exact_errors, ErrorHistory, ErrorNorms};
 use super::manufactured::Manufactured;
 use super::nested::Prolongation;
 use crate::error::Error;
+use crate::model::Problem;
+use crate::model::State;
 use crate::output::convergence_plot::{write_convergence_plot, Curve};
 use crate::output::{self, OutputError};
-use crate::model::Problem;
 use crate::scenario::Scenario;
-use crate::model::State;
 use crate::time;
 
 /// The largest number of levels: level 8 (h = 1/256) already has 1024 × 256 cells per level for
