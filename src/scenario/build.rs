@@ -1,0 +1,342 @@
+//! Translation of a checked scenario into the core's typed parts: the data ([`Datum`]), the
+//! mesh, the [`ProblemBuilder`] (initial fields or a checkpoint's, loads, laws), the
+//! [`SolverParams`] and the [`OutputPlan`] of a run.
+
+use std::path::Path;
+
+use toml::{Table, Value};
+
+use super::validate::{invalid, MAX_MAGNITUDE};
+use super::{Affine, DatumSpec, FrictionSpec, Scenario, Traction};
+use crate::contact::{LinearHeating, QuadraticExchange, SlipWeakening, Tresca};
+use crate::driver::{OutputPlan, Summary};
+use crate::error::Error;
+use crate::loads::{Datum, Expression};
+use crate::material::{Isotropic, Material};
+use crate::mesh::{self, Mesh};
+use crate::model::{InitialFields, LoadTarget, ModelError, Problem, ProblemBuilder, State, TimeGrid};
+use crate::step::{KrylovParams, SolverParams};
+
+impl DatumSpec {
+    /// The datum of the core, with `n` components, its expressions compiled; errors name `key`.
+    pub fn to_datum(&self, key: &str, n: usize) -> Result<Datum, Error> {
+        let expected = || {
+            if n == 1 {
+                "one component (a scalar)".to_string()
+            } else {
+                format!("{n} components (one per space dimension)")
+            }
+        };
+        let count = |len: usize| {
+            if len == n {
+                Ok(())
+            } else {
+                Err(invalid(key, &self.to_string(), &expected()))
+            }
+        };
+        let finite = |values: &[f64]| {
+            if values.iter().all(|v| v.is_finite() && v.abs() <= MAX_MAGNITUDE) {
+                Ok(())
+            } else {
+                Err(invalid(key, &self.to_string(), "finite numbers of magnitude ≤ 1e18"))
+            }
+        };
+        match self {
+            DatumSpec::Scalar(inner) => inner.to_datum(key, n),
+            DatumSpec::Numbers(values) => {
+                count(values.len())?;
+                finite(values)?;
+                Ok(Datum::Constant(values.clone()))
+            }
+            DatumSpec::Affine(Affine { constant, rate }) => {
+                count(constant.len())?;
+                finite(constant)?;
+                finite(rate)?;
+                Ok(Datum::affine(constant.clone(), rate.clone()))
+            }
+            DatumSpec::Expressions(texts) => {
+                count(texts.len())?;
+                let compiled = texts
+                    .iter()
+                    .map(|text| {
+                        Expression::parse(text).map_err(|e| Error::InvalidValue {
+                            key: key.to_string(),
+                            value: format!("{text:?}"),
+                            expected: format!("an expression of x, y, z, t; {e}"),
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(Datum::Expressions(compiled))
+            }
+        }
+    }
+}
+
+impl Traction {
+    /// The keys the entry sets, as a user would list them: "{part, constant}".
+    fn given_keys(&self) -> String {
+        let given = [
+            ("part", true),
+            ("value", self.value.is_some()),
+            ("constant", self.constant.is_some()),
+            ("rate", self.rate.is_some()),
+        ];
+        let names: Vec<&str> = given.iter().filter(|(_, set)| *set).map(|(name, _)| *name).collect();
+        format!("{{{}}}", names.join(", "))
+    }
+
+    /// The traction as one datum form; errors name `key`.
+    pub(super) fn datum_spec(&self, key: &str) -> Result<DatumSpec, Error> {
+        match (&self.value, &self.constant, &self.rate) {
+            (Some(value), None, None) => Ok(value.clone()),
+            (None, Some(constant), Some(rate)) => Ok(DatumSpec::Affine(Affine {
+                constant: constant.clone(),
+                rate: rate.clone(),
+            })),
+            _ => Err(Error::InvalidValue {
+                key: key.to_string(),
+                value: self.given_keys(),
+                expected: "either `value` or both `constant` and `rate`".to_string(),
+            }),
+        }
+    }
+}
+
+impl Scenario {
+    /// The mesh: read from `mesh.file` (once, when the scenario was loaded) or generated.
+    pub fn mesh(&self) -> Result<Mesh, Error> {
+        if let Some(mesh) = &self.loaded.0 {
+            return Ok(mesh.as_ref().clone());
+        }
+        if let Some(file) = &self.mesh.file {
+            return mesh::read_msh(file).map_err(Error::Mesh);
+        }
+        let s = self.structured().ok_or_else(|| {
+            invalid(
+                "mesh",
+                &"(no file, no cell counts)",
+                "`file` or the cell counts nx, ny (and nz) with geometry.lengths",
+            )
+        })?;
+        let generated = match (s.lengths.as_slice(), s.cells.as_slice()) {
+            ([lx, ly], [nx, ny]) => mesh::try_rectangle(*lx, *ly, *nx, *ny),
+            ([lx, ly, lz], [nx, ny, nz]) => mesh::try_cuboid([*lx, *ly, *lz], [*nx, *ny, *nz]),
+            _ => {
+                return Err(invalid(
+                    "geometry.lengths",
+                    &s.lengths,
+                    "2 lengths with mesh.nx, mesh.ny (rectangle) or 3 with mesh.nx, mesh.ny, mesh.nz (box)",
+                ))
+            }
+        };
+        // Validation bounds the cells' shape; this catches what it does not foresee (a scenario
+        // changed after validation), naming the keys rather than panicking.
+        generated.map_err(|e| Error::InvalidValue {
+            key: "geometry.lengths".to_string(),
+            value: format!("{:?} with the cell counts {:?}", s.lengths, s.cells),
+            expected: format!(
+                "a box whose generated mesh is valid (change geometry.lengths or mesh.nx, mesh.ny, mesh.nz): {e}"
+            ),
+        })
+    }
+
+    /// Time levels n (0 ≤ n ≤ N) of the output: the output times, each rounded to the nearest
+    /// level (a time that rounds to 0 is the initial state), and every `output.every`-th level;
+    /// sorted and without repeats.
+    pub fn output_steps(&self) -> Vec<usize> {
+        let k = self.time_step();
+        let n_steps = self.time.steps;
+        let mut steps: Vec<usize> = self
+            .output
+            .times
+            .iter()
+            .map(|&t| ((t / k).round() as usize).min(n_steps))
+            .collect();
+        if let Some(frames) = n_steps.checked_div(self.output.every) {
+            steps.extend((1..=frames).map(|i| i * self.output.every));
+        }
+        steps.sort_unstable();
+        steps.dedup();
+        steps
+    }
+
+    /// The material of the scenario.
+    pub fn material(&self) -> Material {
+        let m = &self.material;
+        Material {
+            density: m.density,
+            heat_capacity: m.heat_capacity,
+            viscosity: Isotropic::viscosity(m.viscosity_mu1, m.viscosity_mu2),
+            elasticity: Isotropic::elasticity(m.young, m.poisson),
+            expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
+            conductivity: m.conductivity,
+            reference_temperature: m.reference_temperature,
+        }
+    }
+
+    /// The scenario's problem, ready for a builder's last touches (extra loads).
+    pub fn builder(&self) -> Result<ProblemBuilder, Error> {
+        let mesh = self.mesh()?;
+        let initial = match &self.initial.from {
+            Some(path) => Some(initial_state(path, &mesh)?),
+            None => None,
+        };
+        let d = mesh.dim;
+        let b = &self.boundary;
+        let h = &self.heat_exchange;
+        let mut builder = ProblemBuilder::new(
+            mesh,
+            self.material(),
+            TimeGrid::new(self.time.final_time, self.time.steps),
+        )
+        .dirichlet(&names(&b.dirichlet))
+        .neumann(&names(&b.neumann))
+        .contact(&names(&b.contact))
+        .symmetry(&names(&b.symmetry))
+        .boundary_temperature(b.temperature)
+        .heat_exchange(QuadraticExchange {
+            coefficient: h.coefficient,
+            foundation_temperature: h.foundation_temperature,
+        })
+        .frictional_heating(LinearHeating::affine(
+            self.frictional_heating.constant,
+            self.frictional_heating.rate,
+        ))
+        .initial_displacement(
+            self.initial.displacement.to_datum("initial.displacement", d)?,
+            "initial.displacement",
+        )
+        .initial_velocity(
+            self.initial.velocity.to_datum("initial.velocity", d)?,
+            "initial.velocity",
+        )
+        .initial_temperature(
+            self.initial.temperature.to_datum("initial.temperature", 1)?,
+            "initial.temperature",
+        );
+        if let Some(fields) = initial {
+            builder = builder.initial_fields(fields, "initial.from");
+        }
+        builder = match self.friction {
+            FrictionSpec::SlipWeakening { bound, a, b, alpha } => builder.friction(SlipWeakening {
+                scale: bound,
+                a,
+                b,
+                alpha,
+            }),
+            FrictionSpec::Tresca { bound } => builder.friction(Tresca { scale: bound }),
+        };
+        let loads = &self.loads;
+        builder = builder
+            .labelled_load(
+                LoadTarget::BodyForce,
+                loads.body_force.to_datum("loads.body_force", d)?,
+                "loads.body_force".into(),
+            )
+            .labelled_load(
+                LoadTarget::HeatSource,
+                loads.heat_source.to_datum("loads.heat_source", 1)?,
+                "loads.heat_source".into(),
+            );
+        for (i, t) in loads.traction.iter().enumerate() {
+            let key = format!("loads.traction[{i}]");
+            let datum = t.datum_spec(&key)?.to_datum(&key, d)?;
+            builder = builder.labelled_load(LoadTarget::Traction(t.part.clone()), datum, key);
+        }
+        for (i, p) in loads.pressure.iter().enumerate() {
+            let key = format!("loads.pressure[{i}].value");
+            let datum = p.value.to_datum(&key, 1)?;
+            builder = builder.labelled_load(LoadTarget::Pressure(p.part.clone()), datum, key);
+        }
+        Ok(builder)
+    }
+
+    /// The discrete problem of the scenario.
+    pub fn build(&self) -> Result<Problem, Error> {
+        self.builder()?.build().map_err(|e| match e {
+            ModelError::CurvedSymmetryPart { part } => {
+                invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)")
+            }
+            other => other.into(),
+        })
+    }
+
+    /// The solver settings of the scenario.
+    pub fn solver_params(&self) -> SolverParams {
+        let s = &self.solver;
+        SolverParams {
+            kind: s.kind,
+            tolerance: s.tolerance,
+            max_convexification: s.max_convexification,
+            inner_tolerance: s.inner_tolerance,
+            max_inner: s.max_inner,
+            max_sweeps: s.max_sweeps,
+            cutback: s.cutback,
+            max_cutback_depth: s.max_cutback_depth,
+            linear: s.linear,
+            krylov: KrylovParams {
+                rtol: s.krylov_tolerance,
+                max_iterations: s.max_krylov,
+                preconditioner: s.preconditioner,
+                ..KrylovParams::default()
+            },
+        }
+    }
+
+    /// What a run of the scenario writes, and when.
+    pub fn output_plan(&self) -> OutputPlan {
+        OutputPlan {
+            steps: self.output_steps(),
+            vtk: self.output.vtk,
+            compress: self.output.compress,
+            csv: self.output.csv,
+            slip_tolerance: self.solver.slip_tolerance,
+            record: Some(self.to_toml()),
+            fingerprint: Some(self.fingerprint()),
+            checkpoint_every: (self.output.checkpoint_every > 0).then_some(self.output.checkpoint_every),
+        }
+    }
+
+    /// SHA-256 of everything that defines the problem: the scenario without `[output]` and
+    /// `[solver]` (a run may be continued with other output times or solver settings, e.g. a
+    /// larger `solver.max_sweeps` after a failure) and without `mesh.file`'s path (the mesh has
+    /// a fingerprint of its own).
+    pub fn fingerprint(&self) -> String {
+        let mut table: Table = self.to_toml().parse().expect("a scenario's TOML parses");
+        table.remove("output");
+        table.remove("solver");
+        if let Some(Value::Table(mesh)) = table.get_mut("mesh") {
+            mesh.remove("file");
+        }
+        crate::output::checkpoint::text_fingerprint(&table.to_string())
+    }
+
+    /// Builds and runs the scenario without writing files (tests and studies); returns the
+    /// summary and the state at T.
+    pub fn run_quiet(&self) -> Result<(Summary, State), Error> {
+        let problem = self.build()?;
+        crate::driver::run_quiet(&problem, &self.solver_params(), &self.output_plan())
+    }
+}
+
+fn names(list: &[String]) -> Vec<&str> {
+    list.iter().map(String::as_str).collect()
+}
+
+/// u, w, θ of the checkpoint at `path` (`initial.from`), which must be of a run on `mesh`.
+fn initial_state(path: &Path, mesh: &Mesh) -> Result<InitialFields, Error> {
+    let checkpoint = crate::output::checkpoint::read(path)?;
+    if checkpoint.identity.mesh != crate::output::checkpoint::mesh_fingerprint(mesh) {
+        return Err(invalid(
+            "initial.from",
+            &path.display().to_string(),
+            "a checkpoint of a run on this scenario's mesh (its mesh differs)",
+        ));
+    }
+    let state = checkpoint.state;
+    Ok(InitialFields {
+        displacement: state.u,
+        velocity: state.w,
+        temperature: state.theta,
+    })
+}

@@ -1,0 +1,473 @@
+//! Reading a scenario: the text of a file (or none), laid over the built-in default key by key,
+//! then the `--set key=value` overrides; unknown and removed keys are refused by name, and a
+//! deserialization error is turned into one that names the dotted key.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use toml::{Table, Value};
+
+use super::schema::LoadedMesh;
+use super::validate::invalid;
+use super::Scenario;
+use crate::error::Error;
+use crate::mesh::{self, Mesh};
+
+/// The default scenario (the paper's example), with comments.
+pub const DEFAULT_TOML: &str = include_str!("../../scenarios/paper.toml");
+
+/// The largest scenario file read (1 MiB).
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Scenario::load(None, &[]).expect("the built-in scenario is valid")
+    }
+}
+
+impl Scenario {
+    /// Loads a scenario: the built-in default, overlaid by the file's text (if any), overlaid by
+    /// `key.path=value` overrides; then validated. A relative `mesh.file` is taken relative to
+    /// the current directory.
+    pub fn load(file_text: Option<&str>, overrides: &[String]) -> Result<Self, Error> {
+        Self::load_in(file_text, overrides, None, None)
+    }
+
+    /// [`Scenario::load`] on a mesh given in memory (built by a program, e.g. from arrays): the
+    /// mesh replaces the structured generator as a `mesh.file` does — the default's geometry,
+    /// cell counts and tractions (on the rectangle's parts) go — and the boundary parts named in
+    /// the text and overrides are checked against the mesh's. The text may hold no `geometry`
+    /// and no `mesh` keys. The mesh is not part of [`Scenario::to_toml`]: load that text again
+    /// with the same mesh.
+    ///
+    /// ```
+    /// use thermocontact::{mesh, Scenario};
+    /// let m = mesh::rectangle(40.0, 10.0, 8, 2); // parts left, right, bottom, top
+    /// let s = Scenario::load_with_mesh(None, &["time.steps=4".into()], m).unwrap();
+    /// assert_eq!((s.dim(), s.structured(), s.time.steps), (2, None, 4));
+    /// ```
+    pub fn load_with_mesh(
+        file_text: Option<&str>,
+        overrides: &[String],
+        mesh: impl Into<Arc<Mesh>>,
+    ) -> Result<Self, Error> {
+        Self::load_in(file_text, overrides, None, Some(mesh.into()))
+    }
+
+    /// [`Scenario::load`] from a file: a relative `mesh.file` in it is taken relative to the
+    /// file's folder.
+    pub fn load_file(path: &Path, overrides: &[String]) -> Result<Self, Error> {
+        // A scenario is a page of settings; data arrays belong in mesh files. Parsing holds
+        // ~60× the text in memory, so a huge file is refused before it is read.
+        if let Ok(meta) = std::fs::metadata(path) {
+            if meta.len() > MAX_SCENARIO_BYTES {
+                return Err(Error::Scenario(format!(
+                    "{} has {} bytes; a scenario file has at most {MAX_SCENARIO_BYTES}",
+                    path.display(),
+                    meta.len()
+                )));
+            }
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::load_in(Some(&text), overrides, path.parent(), None)
+    }
+
+    fn load_in(
+        file_text: Option<&str>,
+        overrides: &[String],
+        folder: Option<&Path>,
+        given: Option<Arc<Mesh>>,
+    ) -> Result<Self, Error> {
+        let mut table: Table = DEFAULT_TOML.parse().expect("built-in scenario parses");
+        if given.is_some() {
+            drop_generator(&mut table);
+        }
+        if let Some(text) = file_text {
+            let mut user: Table = text
+                .parse()
+                .map_err(|e: toml::de::Error| Error::Scenario(format!("the file is not valid TOML: {e}")))?;
+            resolve_mesh_file(&mut user, folder);
+            if given.is_some() {
+                refuse_mesh_keys(&user)?;
+            }
+            overlay(&mut table, user, "")?;
+        }
+        // All overrides form one table laid over at once, so that `friction.law=tresca` and
+        // `friction.bound=100` together switch the law (one at a time, the second would meet
+        // the first's table, which the switch has emptied).
+        let mut assigned = Table::new();
+        for assignment in overrides {
+            merge(&mut assigned, parse_override(assignment)?);
+        }
+        if given.is_some() {
+            refuse_mesh_keys(&assigned)?;
+        }
+        overlay(&mut table, assigned, "")?;
+        let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
+        let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        if let Some(mesh) = given {
+            scenario.loaded = LoadedMesh(Some(mesh));
+        }
+        if let Some(from) = &mut scenario.initial.from {
+            *from = std::path::absolute(&*from).unwrap_or_else(|_| from.clone());
+        }
+        if let Some(file) = &mut scenario.mesh.file {
+            *file = std::path::absolute(&*file).unwrap_or_else(|_| file.clone());
+            let mesh = mesh::read_msh(file).map_err(Error::Mesh)?;
+            scenario.loaded = LoadedMesh(Some(Arc::new(mesh)));
+        }
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// The scenario as TOML (what a run saves beside its results).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a scenario serializes")
+    }
+}
+
+/// Paths in a scenario file (`mesh.file`, `initial.from`) are relative to its folder.
+fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
+    let Some(folder) = folder else {
+        return;
+    };
+    for (table, key) in [("mesh", "file"), ("initial", "from")] {
+        if let Some(Value::Table(t)) = user.get_mut(table) {
+            if let Some(Value::String(file)) = t.get_mut(key) {
+                if Path::new(file.as_str()).is_relative() {
+                    *file = folder.join(file.as_str()).to_string_lossy().into_owned();
+                }
+            }
+        }
+    }
+}
+
+/// Turns a deserialization error into one that names the dotted key it failed at, found from
+/// the error's span in the (re-serialized) scenario text.
+fn describe(e: &toml::de::Error, text: &str) -> Error {
+    let message = e.message().trim().to_string();
+    let Some(span) = e.span() else {
+        return Error::Scenario(message);
+    };
+    let before = &text[..span.start.min(text.len())];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[line_start..].find('\n').map_or(text.len(), |i| line_start + i);
+    let line = &text[line_start..line_end];
+    let header = |l: &str| {
+        l.trim()
+            .strip_prefix('[')
+            .map(|t| t.trim_matches(|c| c == '[' || c == ']').to_string())
+    };
+    if let Some(table) = header(line) {
+        // The error is about the table as a whole (a key it lacks or must not have).
+        if let Some(field) = missing_field(&message) {
+            return Error::MissingKey {
+                key: format!("{table}.{field}"),
+            };
+        }
+        return Error::Scenario(format!("in `{table}`: {message}"));
+    }
+    let table = before[..line_start].lines().rev().find_map(header);
+    let Some((key, value)) = line.split_once('=') else {
+        return Error::Scenario(message);
+    };
+    let key = match table {
+        Some(t) => format!("{t}.{}", key.trim()),
+        None => key.trim().to_string(),
+    };
+    Error::InvalidValue {
+        key,
+        value: value.trim().to_string(),
+        expected: plain(&message),
+    }
+}
+
+/// The field of serde's "missing field `bound`".
+fn missing_field(message: &str) -> Option<&str> {
+    message.strip_prefix("missing field `")?.strip_suffix('`')
+}
+
+/// serde's "invalid value: integer `-1`, expected usize" as what a user should write.
+fn plain(message: &str) -> String {
+    match message.rsplit_once(", expected ") {
+        Some((_, "usize" | "u64" | "u32")) => "a non-negative integer".into(),
+        Some((_, "a string")) => "a string".into(),
+        Some((_, "a boolean")) => "true or false".into(),
+        Some((_, expected)) if message.starts_with("invalid ") => expected.to_string(),
+        _ => message.to_string(),
+    }
+}
+
+/// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
+/// and checked when the scenario is read.
+const OPTIONAL_KEYS: &[&str] = &[
+    "mesh.nz",
+    "mesh.file",
+    "boundary.symmetry",
+    "loads.pressure",
+    "initial.from",
+];
+
+/// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
+/// any of these forms ([`DatumSpec`] checks the new value).
+const DATUM_KEYS: &[&str] = &[
+    "loads.body_force",
+    "loads.heat_source",
+    "initial.displacement",
+    "initial.velocity",
+    "initial.temperature",
+];
+
+/// Keys that existed once, with what replaced them.
+const REMOVED_KEYS: &[(&str, &str)] = &[(
+    "boundary.contact_normal",
+    "each contact node's outward normal now comes from the mesh; remove the key",
+)];
+
+/// Lays `user` over `base`, key by key. A key unknown to the base is an error naming its path. A
+/// table whose `law` changes is replaced whole, since its keys depend on the law; a `mesh.file`
+/// replaces the structured generator (the base's geometry and cell counts go).
+fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
+    if prefix.is_empty() {
+        take_mesh_file(base, &user)?;
+    }
+    for (key, value) in user {
+        let path = if prefix.is_empty() {
+            key.clone()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        if let Some((_, instead)) = REMOVED_KEYS.iter().find(|(removed, _)| *removed == path) {
+            return Err(Error::RemovedKey {
+                key: path,
+                instead: instead.to_string(),
+            });
+        }
+        if prefix == "mesh" && base.contains_key("file") && ["nx", "ny", "nz"].contains(&key.as_str()) {
+            return Err(invalid(
+                &path,
+                &value.to_string(),
+                "no cell counts beside mesh.file (they belong to the structured generator)",
+            ));
+        }
+        if prefix.is_empty() && key == "geometry" && !base.contains_key("geometry") {
+            return Err(invalid(
+                "geometry",
+                &value.to_string(),
+                "no geometry beside mesh.file (the mesh file gives the geometry)",
+            ));
+        }
+        if !base.contains_key(&key) && OPTIONAL_KEYS.contains(&path.as_str()) {
+            base.insert(key, value);
+            continue;
+        }
+        let Some(slot) = base.get_mut(&key) else {
+            let known: Vec<&String> = base.keys().collect();
+            return Err(Error::UnknownKey {
+                key: path,
+                expected: format!("{known:?}"),
+            });
+        };
+        if DATUM_KEYS.contains(&path.as_str()) {
+            *slot = value;
+            continue;
+        }
+        match (slot, value) {
+            (Value::Table(b), Value::Table(u)) => {
+                let tag = ["law"].into_iter().find(|t| b.contains_key(*t));
+                let replaced = tag.is_some_and(|t| u.get(t).is_some_and(|v| Some(v) != b.get(t)));
+                if replaced {
+                    *b = u;
+                } else {
+                    overlay(b, u, &path)?;
+                }
+            }
+            (slot, value) => {
+                check_type(&path, slot, &value)?;
+                *slot = coerce(slot, value);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A user table that sets `mesh.file` replaces the generator: the base's geometry, cell counts
+/// and tractions (on the generator's parts) go, and the user may not give the first two beside
+/// the file.
+fn take_mesh_file(base: &mut Table, user: &Table) -> Result<(), Error> {
+    let Some(Value::Table(mesh)) = user.get("mesh") else {
+        return Ok(());
+    };
+    if !mesh.contains_key("file") {
+        return Ok(());
+    }
+    if let Some(key) = ["nx", "ny", "nz"].into_iter().find(|k| mesh.contains_key(*k)) {
+        return Err(invalid(
+            &format!("mesh.{key}"),
+            &mesh[key].to_string(),
+            "no cell counts beside mesh.file (they belong to the structured generator)",
+        ));
+    }
+    if let Some(geometry) = user.get("geometry") {
+        return Err(invalid(
+            "geometry",
+            &geometry.to_string(),
+            "no geometry beside mesh.file (the mesh file gives the geometry)",
+        ));
+    }
+    drop_generator(base);
+    Ok(())
+}
+
+/// A mesh given in memory ([`Scenario::load_with_mesh`]) replaces `mesh.file` and the
+/// generator, so the user's scenario may not set them: refused here, by key, because the
+/// generator's keys are gone from the base table and the overlay would only say "unknown".
+fn refuse_mesh_keys(user: &Table) -> Result<(), Error> {
+    let expected = "no mesh keys beside a mesh given in memory (it replaces mesh.file and the generator)";
+    if let Some(geometry) = user.get("geometry") {
+        return Err(invalid("geometry", &geometry.to_string(), expected));
+    }
+    if let Some(Value::Table(mesh)) = user.get("mesh") {
+        if let Some((key, value)) = mesh.iter().next() {
+            return Err(invalid(&format!("mesh.{key}"), &value.to_string(), expected));
+        }
+    }
+    Ok(())
+}
+
+/// Removes the structured generator from `base` for a mesh from elsewhere (a file, or given in
+/// memory): its geometry and cell counts, and the tractions on the rectangle's parts.
+fn drop_generator(base: &mut Table) {
+    base.remove("geometry");
+    base.insert("mesh".into(), Value::Table(Table::new()));
+    // The default's tractions act on the rectangle's parts: another mesh has its own.
+    if let Some(Value::Table(loads)) = base.get_mut("loads") {
+        loads.insert("traction".into(), Value::Array(Vec::new()));
+    }
+}
+
+fn type_name(v: &Value) -> &'static str {
+    match v {
+        Value::String(_) => "a string",
+        Value::Integer(_) => "an integer",
+        Value::Float(_) => "a number",
+        Value::Boolean(_) => "true or false",
+        Value::Datetime(_) => "a date",
+        Value::Array(_) => "an array",
+        Value::Table(_) => "a table",
+    }
+}
+
+fn check_type(path: &str, base: &Value, user: &Value) -> Result<(), Error> {
+    let compatible = matches!(
+        (base, user),
+        (Value::Float(_), Value::Integer(_))
+            | (Value::String(_), Value::String(_))
+            | (Value::Integer(_), Value::Integer(_))
+            | (Value::Float(_), Value::Float(_))
+            | (Value::Boolean(_), Value::Boolean(_))
+            | (Value::Array(_), Value::Array(_))
+            | (Value::Table(_), Value::Table(_))
+    );
+    if compatible {
+        Ok(())
+    } else {
+        Err(Error::InvalidValue {
+            key: path.to_string(),
+            value: user.to_string(),
+            expected: type_name(base).to_string(),
+        })
+    }
+}
+
+/// Integers written where the default holds a float become floats (`final_time = 1`).
+fn coerce(base: &Value, user: Value) -> Value {
+    match (base, user) {
+        (Value::Float(_), Value::Integer(i)) => Value::Float(i as f64),
+        (Value::Array(b), Value::Array(u)) if b.first().is_some_and(|v| v.is_float()) => {
+            Value::Array(u.into_iter().map(|v| coerce(&Value::Float(0.0), v)).collect())
+        }
+        (_, user) => user,
+    }
+}
+
+/// Reads `a.b.c=value` as the nested table {a = {b = {c = value}}}; the value is read as TOML,
+/// or as a plain string if it is not TOML.
+fn parse_override(assignment: &str) -> Result<Table, Error> {
+    let Some((path, raw)) = assignment.split_once('=') else {
+        return Err(Error::InvalidValue {
+            key: assignment.to_string(),
+            value: String::new(),
+            expected: "an override of the form key.path=value".into(),
+        });
+    };
+    let (path, raw) = (path.trim(), raw.trim());
+    let value = match format!("v = {raw}").parse::<Table>() {
+        Ok(mut t) => t.remove("v").expect("the key just written"),
+        Err(_) => Value::String(raw.to_string()),
+    };
+    let (parents, last) = match path.rsplit_once('.') {
+        Some((parents, last)) => (parents.split('.').collect(), last),
+        None => (Vec::new(), path),
+    };
+    let mut table = Table::from_iter([(last.to_string(), value)]);
+    for key in parents.into_iter().rev() {
+        table = Table::from_iter([(key.to_string(), Value::Table(table))]);
+    }
+    Ok(table)
+}
+
+/// Lays the override table `later` into `earlier`: tables merge key by key, anything else is
+/// replaced (the later override wins).
+fn merge(earlier: &mut Table, later: Table) {
+    for (key, value) in later {
+        match (earlier.get_mut(&key), value) {
+            (Some(Value::Table(e)), Value::Table(l)) => merge(e, l),
+            (_, value) => {
+                earlier.insert(key, value);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::FrictionSpec;
+    use crate::step::SolverKind;
+
+    #[test]
+    fn overrides_and_files_overlay_the_default() {
+        let s = Scenario::load(Some("[mesh]\nnx = 8\n[time]\nfinal_time = 2"), &["mesh.ny=2".into()]).unwrap();
+        assert_eq!((s.mesh.nx, s.mesh.ny), (Some(8), Some(2)));
+        assert_eq!(s.time.final_time, 2.0);
+        let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
+        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 3.0 });
+        let t = Scenario::load(None, &["friction.law=tresca".into(), "friction.bound=100".into()]).unwrap();
+        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 100.0 });
+        let back = Scenario::load(
+            None,
+            &[
+                "friction.law=tresca".into(),
+                "friction.bound=100".into(),
+                "friction={law=\"slip-weakening\", bound=150.0, a=1.0, b=0.2, alpha=100.0}".into(),
+                "friction.alpha=50".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(
+            back.friction,
+            FrictionSpec::SlipWeakening {
+                bound: 150.0,
+                a: 1.0,
+                b: 0.2,
+                alpha: 50.0
+            }
+        );
+        let p = Scenario::load(None, &["solver.kind=paper".into()]).unwrap();
+        assert_eq!(p.solver.kind, SolverKind::Paper);
+    }
+}

@@ -1,0 +1,374 @@
+//! The scenario's schema: the serde types of the TOML, one per table, with the datum forms
+//! ([`DatumSpec`]) and the accessors every other part of the layer reads (the structured mesh,
+//! the space dimension, the time step).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+use toml::Value;
+
+use crate::mesh::Mesh;
+use crate::step::{LinearKind, PreconditionerKind, SolverKind};
+
+/// A complete, validated scenario.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// The box of the structured generator; absent when the mesh comes from a file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<Geometry>,
+    pub mesh: MeshSpec,
+    pub time: TimeSpec,
+    pub boundary: BoundarySpec,
+    pub material: MaterialSpec,
+    pub initial: InitialSpec,
+    pub loads: Loads,
+    pub friction: FrictionSpec,
+    pub heat_exchange: HeatExchangeSpec,
+    pub frictional_heating: Affine<f64>,
+    pub solver: SolverSpec,
+    pub output: OutputSpec,
+    /// The mesh read from `mesh.file`, kept from validation to the build.
+    #[serde(skip)]
+    pub(super) loaded: LoadedMesh,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    /// Side lengths of the rectangle (2 values) or box (3 values).
+    pub lengths: Vec<f64>,
+}
+
+/// The mesh: a Gmsh file, or cell counts for the structured generator over `geometry`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// A Gmsh `.msh` file (a path relative to the scenario file; stored resolved).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nx: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ny: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nz: Option<usize>,
+}
+
+/// A structured mesh: the box and its cell counts (2 or 3 of each).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Structured {
+    pub lengths: Vec<f64>,
+    pub cells: Vec<usize>,
+}
+
+impl Structured {
+    /// Cells along x.
+    pub fn nx(&self) -> usize {
+        self.cells[0]
+    }
+
+    /// Cells along y.
+    pub fn ny(&self) -> usize {
+        self.cells[1]
+    }
+}
+
+/// A mesh read once from a file and shared by the clones of a scenario; equal to any other (the
+/// file name is what identifies a scenario).
+#[derive(Debug, Clone, Default)]
+pub(super) struct LoadedMesh(pub(super) Option<Arc<Mesh>>);
+
+impl PartialEq for LoadedMesh {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    pub final_time: f64,
+    pub steps: usize,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// Γ_D (may be empty: a body held by friction alone).
+    pub dirichlet: Vec<String>,
+    pub neumann: Vec<String>,
+    pub contact: Vec<String>,
+    /// θ_D on Γ_D ∪ Γ_N.
+    pub temperature: f64,
+    /// Symmetry (roller) planes: w·ν = 0, no shear traction, no heat flux (optional; none in
+    /// the default).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub symmetry: Vec<String>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub density: f64,
+    pub heat_capacity: f64,
+    pub viscosity_mu1: f64,
+    pub viscosity_mu2: f64,
+    pub young: f64,
+    pub poisson: f64,
+    pub thermal_expansion: f64,
+    pub conductivity: f64,
+    pub reference_temperature: f64,
+}
+
+/// The initial data (10), each a datum at t = 0 (numbers or expressions of x, y, z).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// A checkpoint of another run on the same mesh whose u, w, θ become u₀, u₁, θ₀ (the data
+    /// below are then unused); a path relative to the scenario file, stored resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<PathBuf>,
+    pub displacement: DatumSpec,
+    pub velocity: DatumSpec,
+    pub temperature: DatumSpec,
+}
+
+/// A datum affine in time: value(t) = constant + rate · t.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Affine<T> {
+    pub constant: T,
+    pub rate: T,
+}
+
+impl Affine<f64> {
+    /// The value at time t.
+    pub fn at(&self, t: f64) -> f64 {
+        self.constant + self.rate * t
+    }
+}
+
+/// A datum as a scenario writes it: a number or an array of numbers (constant), a
+/// `{ constant, rate }` table (affine in t), or a string or an array of strings (expressions in
+/// x, y, z, t).
+#[derive(Debug, Clone, PartialEq)]
+pub enum DatumSpec {
+    Numbers(Vec<f64>),
+    Affine(Affine<Vec<f64>>),
+    Expressions(Vec<String>),
+    /// A single number or string, written without brackets.
+    Scalar(Box<DatumSpec>),
+}
+
+const DATUM_FORMS: &str = "a number or an array of numbers, a { constant, rate } table, or an expression \
+     string (or an array of them) in x, y, z, t";
+
+impl<'de> Deserialize<'de> for DatumSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let value = Value::deserialize(deserializer)?;
+        let number = |v: &Value| match v {
+            Value::Float(x) => Some(*x),
+            Value::Integer(i) => Some(*i as f64),
+            _ => None,
+        };
+        let numbers = |v: &Value| match v {
+            Value::Array(items) => items.iter().map(number).collect::<Option<Vec<f64>>>(),
+            v => number(v).map(|x| vec![x]),
+        };
+        let spec = match &value {
+            Value::Float(_) | Value::Integer(_) => {
+                DatumSpec::Scalar(Box::new(DatumSpec::Numbers(numbers(&value).unwrap_or_default())))
+            }
+            Value::String(text) => DatumSpec::Scalar(Box::new(DatumSpec::Expressions(vec![text.clone()]))),
+            Value::Array(items) if items.iter().all(|v| number(v).is_some()) => {
+                DatumSpec::Numbers(numbers(&value).unwrap_or_default())
+            }
+            Value::Array(items) if items.iter().all(Value::is_str) => {
+                DatumSpec::Expressions(items.iter().filter_map(|v| v.as_str().map(String::from)).collect())
+            }
+            Value::Table(table) if table.len() == 2 && table.contains_key("constant") && table.contains_key("rate") => {
+                match (numbers(&table["constant"]), numbers(&table["rate"])) {
+                    (Some(constant), Some(rate)) if constant.len() == rate.len() => {
+                        let affine = DatumSpec::Affine(Affine { constant, rate });
+                        if table["constant"].is_array() {
+                            affine
+                        } else {
+                            DatumSpec::Scalar(Box::new(affine))
+                        }
+                    }
+                    _ => {
+                        return Err(D::Error::custom(
+                            "constant and rate must be numbers (or arrays of equal length)",
+                        ))
+                    }
+                }
+            }
+            _ => return Err(D::Error::custom(DATUM_FORMS)),
+        };
+        Ok(spec)
+    }
+}
+
+impl Serialize for DatumSpec {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            DatumSpec::Numbers(v) => v.serialize(serializer),
+            DatumSpec::Expressions(v) => v.serialize(serializer),
+            DatumSpec::Affine(a) => a.serialize(serializer),
+            DatumSpec::Scalar(inner) => match inner.as_ref() {
+                DatumSpec::Numbers(v) if v.len() == 1 => v[0].serialize(serializer),
+                DatumSpec::Expressions(v) if v.len() == 1 => v[0].serialize(serializer),
+                DatumSpec::Affine(a) if a.constant.len() == 1 => Affine {
+                    constant: a.constant[0],
+                    rate: a.rate[0],
+                }
+                .serialize(serializer),
+                other => other.serialize(serializer),
+            },
+        }
+    }
+}
+
+impl DatumSpec {
+    /// A constant datum.
+    pub fn numbers(values: &[f64]) -> Self {
+        DatumSpec::Numbers(values.to_vec())
+    }
+
+    /// A constant scalar, written without brackets.
+    pub fn scalar(value: f64) -> Self {
+        DatumSpec::Scalar(Box::new(DatumSpec::Numbers(vec![value])))
+    }
+
+    /// The values of a constant datum (`None` for affine data and expressions).
+    pub fn constant(&self) -> Option<&[f64]> {
+        match self {
+            DatumSpec::Numbers(v) => Some(v),
+            DatumSpec::Scalar(inner) => inner.constant(),
+            _ => None,
+        }
+    }
+
+    /// The value of a constant scalar datum.
+    pub fn as_scalar(&self) -> Option<f64> {
+        self.constant().filter(|v| v.len() == 1).map(|v| v[0])
+    }
+}
+
+impl std::fmt::Display for DatumSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let text = toml::Value::try_from(self).map(|v| v.to_string()).unwrap_or_default();
+        f.write_str(&text)
+    }
+}
+
+/// A traction f₂ on a Neumann part: `value` (any datum form), or the affine `constant` + `rate`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Traction {
+    pub part: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<DatumSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constant: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate: Option<Vec<f64>>,
+}
+
+/// A normal pressure p on a Neumann part: the traction −p ν.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Pressure {
+    pub part: String,
+    pub value: DatumSpec,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    pub body_force: DatumSpec,
+    pub heat_source: DatumSpec,
+    #[serde(default)]
+    pub traction: Vec<Traction>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressure: Vec<Pressure>,
+}
+
+/// The friction law on Γ_C.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "law", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum FrictionSpec {
+    /// μ(r) = (a − b) e^(−αr) + b, bound μ(r) S (eq. (81)–(83)).
+    SlipWeakening { bound: f64, a: f64, b: f64, alpha: f64 },
+    /// Constant bound S.
+    Tresca { bound: f64 },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HeatExchangeSpec {
+    pub coefficient: f64,
+    pub foundation_temperature: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    pub kind: SolverKind,
+    pub tolerance: f64,
+    pub max_convexification: usize,
+    pub inner_tolerance: f64,
+    pub max_inner: usize,
+    pub max_sweeps: usize,
+    pub cutback: bool,
+    pub max_cutback_depth: usize,
+    pub slip_tolerance: f64,
+    pub linear: LinearKind,
+    pub krylov_tolerance: f64,
+    pub max_krylov: usize,
+    pub preconditioner: PreconditionerKind,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    pub times: Vec<f64>,
+    pub every: usize,
+    pub checkpoint_every: usize,
+    pub vtk: bool,
+    pub compress: bool,
+    pub csv: bool,
+}
+
+impl Scenario {
+    /// The structured mesh's box and cell counts; `None` for a mesh from a file.
+    pub fn structured(&self) -> Option<Structured> {
+        let lengths = self.geometry.as_ref()?.lengths.clone();
+        let mut cells = vec![self.mesh.nx?, self.mesh.ny?];
+        cells.extend(self.mesh.nz);
+        Some(Structured { lengths, cells })
+    }
+
+    /// Sets the structured mesh's cell counts (nz only for a box).
+    pub fn set_cells(&mut self, nx: usize, ny: usize) {
+        self.mesh.nx = Some(nx);
+        self.mesh.ny = Some(ny);
+    }
+
+    /// Space dimension d (2 for a rectangle or a 2D mesh, 3 for a box or a 3D mesh).
+    pub fn dim(&self) -> usize {
+        match (&self.loaded.0, &self.geometry) {
+            (Some(mesh), _) => mesh.dim,
+            (None, Some(g)) => g.lengths.len(),
+            (None, None) => 0,
+        }
+    }
+
+    /// Time step k = T/N.
+    pub fn time_step(&self) -> f64 {
+        self.time.final_time / self.time.steps as f64
+    }
+}
