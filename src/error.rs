@@ -14,7 +14,7 @@ pub enum Error {
     #[error("unknown scenario key `{key}` (expected one of {expected})")]
     UnknownKey { key: String, expected: String },
     /// A scenario key that its table needs and the scenario lacks (e.g. a law's parameter).
-    #[error("the scenario lacks `{key}`, which its table needs here (see the README's scenario format)")]
+    #[error("the scenario lacks `{key}`, which its table needs here (see docs/scenario.md)")]
     MissingKey { key: String },
     /// A scenario key that no longer exists.
     #[error("`{key}` is no longer a scenario key: {instead}")]

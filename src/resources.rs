@@ -2,7 +2,7 @@
 //!
 //! The memory of a run is that of the direct LDLᵀ factor of the step matrix (the rest is a
 //! small multiple of the mesh). Its entries per unknown were measured on the structured meshes
-//! of the examples (`summary.json`'s `factor_nnz`, README Performance): in 2D about 126 at 49k
+//! of the examples (`summary.json`'s `factor_nnz`, docs/performance.md): in 2D about 126 at 49k
 //! unknowns, growing like N^0.1 (nested-dissection-like fill, N log N); in 3D 757 at 17.6k,
 //! 1 300 at 47k and 2 416 at 291k, i.e. about 1 300 (N / 47 000)^{1/3}. A run's peak is about
 //! 18–28 bytes per factor entry (values, indices, the matrices, the cutback levels' factors).

@@ -102,7 +102,11 @@ fn scenario_prints_the_default_as_a_loadable_file() {
 #[test]
 fn readme_is_a_front_page_and_the_scenario_reference_covers_every_default_key() {
     let readme = include_str!("../README.md");
-    assert!(readme.lines().count() <= 250, "README.md is {} lines", readme.lines().count());
+    assert!(
+        readme.lines().count() <= 250,
+        "README.md is {} lines",
+        readme.lines().count()
+    );
     assert!(
         include_str!("../.ci/run").contains("cargo test"),
         ".ci/run runs the README's test command"
@@ -111,7 +115,11 @@ fn readme_is_a_front_page_and_the_scenario_reference_covers_every_default_key() 
         match value {
             toml::Value::Table(table) => {
                 for (key, value) in table {
-                    let path = if prefix.is_empty() { key.clone() } else { format!("{prefix}.{key}") };
+                    let path = if prefix.is_empty() {
+                        key.clone()
+                    } else {
+                        format!("{prefix}.{key}")
+                    };
                     keys(&path, value, out);
                 }
             }

@@ -19,7 +19,11 @@ fn first_states(problem: &Problem) -> Vec<State> {
 
 #[test]
 fn the_sample_is_the_default_scenario() {
-    let sets = ["mesh.nx=16".to_string(), "mesh.ny=4".to_string(), "time.steps=16".to_string()];
+    let sets = [
+        "mesh.nx=16".to_string(),
+        "mesh.ny=4".to_string(),
+        "time.steps=16".to_string(),
+    ];
     let from_toml = Scenario::load(None, &sets).unwrap().build().unwrap();
     let from_builder = samples::paper(16, 4, 16).unwrap();
     let (a, b) = (first_states(&from_toml), first_states(&from_builder));

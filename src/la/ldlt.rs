@@ -34,7 +34,7 @@
 //! milliseconds instead of n_t full solves), and a time step costs one full solve: a full forward
 //! sweep of the right-hand side without contact terms and a trailing backward sweep for
 //! w_τ^free, then, with the contact terms, a trailing forward sweep and one full backward sweep
-//! ([`super::system::StepSystem::free_step`]). The sweeps are our own loops over faer's
+//! (`StepSystem::free_step` of `crate::step::direct`). The sweeps are our own loops over faer's
 //! supernodal layout (faer 0.24 has no forward/backward split for a supernodal LDLᵀ; measured as
 //! fast as its full solve). The price of the constraint on the ordering is a larger factor
 //! (+21 % in 2D at 49k unknowns, +47–50 % in 3D, where the dense trailing supernode also doubles

@@ -93,7 +93,10 @@ pub fn paper_3d(cells: [usize; 3], steps: usize) -> Result<Problem, ModelError> 
             b: 0.2,
             alpha: 100.0,
         })
-        .load(LoadTarget::BodyForce, Datum::affine(vec![0.0, 0.0, -10.0], vec![0.0; 3]))
+        .load(
+            LoadTarget::BodyForce,
+            Datum::affine(vec![0.0, 0.0, -10.0], vec![0.0; 3]),
+        )
         .load(LoadTarget::HeatSource, Datum::affine(vec![0.0], vec![0.0]))
         .load(
             LoadTarget::Traction("z+".into()),

@@ -14,7 +14,7 @@
 //! only, and the full fields need half a solve per outer iterate
 //! ([`super::direct::StepSystem::loaded_state`]).
 //!
-//! The factorization orders the contact unknowns last ([`super::factor`]), so the block of S⁻¹
+//! The factorization orders the contact unknowns last ([`crate::la::QuasiDefiniteLdlt`]), so the block of S⁻¹
 //! = (J A)⁻¹ on them is (L₂₂ D₂ L₂₂ᵀ)⁻¹ and C, H cost two dense triangular solves with the
 //! m × m trailing block of the factor (milliseconds). The alternative it replaces, n_t full
 //! solves with unit right-hand sides, cost ½–1 s in 2D at 49k unknowns and 12 s in 3D at 47k;

@@ -1,4 +1,4 @@
-//! The direct path: the step matrix of Problem 14 ([`super::matrix`]) factored once per run,
+//! The direct path: the step matrix of Problem 14 ([`crate::model::StepMatrix`]) factored once per run,
 //! its contact unknowns last, and the one-solve step skeleton the condensed solvers share
 //! ([`StepSystem::free_step`], [`StepSystem::loaded_state`]).
 
@@ -165,7 +165,7 @@ impl StepSystem {
     }
 
     /// Solves the symmetric system S X = B in place for a column-major block of right-hand sides
-    /// (S = J A; see [`super::factor`]).
+    /// (S = J A; see [`crate::la::QuasiDefiniteLdlt`]).
     pub fn solve_symmetric_block_in_place(&self, block: &mut [f64], n_cols: usize) -> Result<(), Error> {
         let clock = Instant::now();
         self.factor.solve_in_place(block, n_cols);
@@ -178,7 +178,7 @@ impl StepSystem {
 
     /// Entries of S⁻¹ (S = J A) between contact unknowns (tangential velocities and temperatures
     /// of Γ_C nodes), column-major |rows| × |cols|, from the trailing block of the factor alone
-    /// ([`super::factor`]).
+    /// ([`crate::la::QuasiDefiniteLdlt`]).
     ///
     /// # Panics
     /// If an unknown is not a contact unknown.
@@ -212,7 +212,7 @@ impl StepSystem {
 
     /// The first half of every step solver's step: the right-hand side b without contact terms,
     /// z = D⁻¹ L⁻¹ P J b over all of L, and x = L⁻ᵀ z on the contact unknowns only (the trailing
-    /// block; [`super::factor`]), whose tangential velocities are w_τ^free of the condensed
+    /// block; [`crate::la::QuasiDefiniteLdlt`]), whose tangential velocities are w_τ^free of the condensed
     /// problem.
     pub fn free_step(&self, problem: &Problem, previous: &State, t: f64) -> Result<FreeStep, Error> {
         let mut x = self.rhs(problem, previous, t)?;

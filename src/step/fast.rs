@@ -5,7 +5,7 @@
 //!
 //! Per step: the forward sweep and the contact block of the backward one for w_τ^free, the
 //! iterations on Γ_C (dense, small), the contact block of the forward sweep and a full backward
-//! one for the fields ([`super::system`]): one sparse solve — against half a solve per
+//! one for the fields ([`super::direct`]): one sparse solve — against half a solve per
 //! convexification iterate for the paper's solver.
 //!
 //! The order of the three methods decides which solution a step with several gets: Newton from

@@ -14,7 +14,7 @@
 //! O(n_t) per iteration ([`Ilu0::refactor_from`]) and the preconditioner is the ILU(0) of Ã
 //! itself, not of A (a stick row, w_i = 0, is far from A's row; preconditioning Ã with A's
 //! factor would leave GMRES a rank-n_t perturbation to find). Before them come the two halves
-//! of the mesh and the cross-section between them ([`super::bisection`]), so that the ILU(0)
+//! of the mesh and the cross-section between them ([`crate::la::level_bisection`]), so that the ILU(0)
 //! sweeps run the halves on the two cores. GMRES starts from the previous
 //! iterate (from the previous step's state at the first), so the later iterations of a step
 //! need few Krylov iterations. Why GMRES + ILU(0) and when it stays bounded:

@@ -83,7 +83,7 @@ impl PreconditionerKind {
     /// sweeps, two products with Ã and PETSc's single-threaded V-cycle), and the warm-started
     /// Newton solves of a run need fewer iterations than this cold probe, so the AMG pays only
     /// where ILU(0)'s count is far beyond its own 7–14. Measured on the 3D example at 70k
-    /// unknowns, 4 steps (README, "3D at scale"): at k = 1/8 (probe 19) ILU(0) runs the solves
+    /// unknowns, 4 steps (docs/performance.md): at k = 1/8 (probe 19) ILU(0) runs the solves
     /// in 4.9 s, the AMG in 9.5 s; at k = 1/2 (probe 71) 30.3 s against 30.5 s; at k = 1 (probe
     /// 146) 39.0 s against 22.6 s.
     pub const AUTO_AMG_ABOVE: usize = 80;

@@ -230,7 +230,7 @@ impl<'a> NewtonKrylov<'a> {
         let b_unordered = sys.rhs.rhs(problem, previous, t)?;
         let b: Vec<f64> = sys.order.iter().map(|&o| b_unordered[o]).collect();
         let x_previous = sys.rhs.unknowns_of(problem, previous);
-        let mut x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
+        let x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
         sys.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
 
         let w = self.tangential(&x);
