@@ -25,7 +25,7 @@ use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymmetricOrder
 use faer::sparse::SymbolicSparseColMat;
 use faer::Side;
 use thermocontact::la::NodeGraph;
-use thermocontact::step::direct::StepSystem;
+use thermocontact::step::StepSystem;
 use thermocontact::{Problem, Scenario};
 
 fn main() -> anyhow::Result<()> {

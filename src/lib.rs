@@ -19,12 +19,12 @@
 //! P1 elements for the velocity w and the temperature θ, backward Euler in time with step k,
 //! u_n = u_{n−1} + k w_n. Each step is one linear system with a constant matrix
 //! ([`model::StepMatrix`]) plus the nonsmooth laws on Γ_C, solved by the
-//! convexification loop with an augmented-Lagrangian inner solver ([`step::paper`]). Two linear
+//! convexification loop with an augmented-Lagrangian inner solver ([`step::PaperSolver`]). Two linear
 //! paths carry it: the direct one factors the matrix once and condenses each step onto Γ_C
-//! ([`step::direct::StepSystem`], [`step::fast`]); the iterative one solves each step on all
-//! unknowns by Newton iterations with GMRES + ILU(0) ([`step::newton_krylov`]), memory linear
+//! ([`step::StepSystem`], [`step::FastSolver`]); the iterative one solves each step on all
+//! unknowns by Newton iterations with GMRES + ILU(0) ([`step::NewtonKrylov`]), memory linear
 //! in the unknowns (`solver.linear`); where the stiffness weighs, an AMG coarse correction of
-//! the velocities ([`step::amg`], PETSc's GAMG behind the cargo feature `petsc`) keeps its
+//! the velocities ([`step::VelocityAmg`], PETSc's GAMG behind the cargo feature `petsc`) keeps its
 //! Krylov iterations bounded (`solver.preconditioner`).
 //!
 //! ## Glossary (paper symbol → identifier)
@@ -42,8 +42,8 @@
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |
 //! | A, S = J A | `CsrMatrix` (A), `StepMatrix::matrix` (S) | the step matrix, and its symmetric quasi-definite form (temperature rows negated) |
-//! | Ã | the Newton matrix of [`step::newton_krylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
-//! | A_ww, B⁻¹ | `VelocityAmg` | the velocity block of A, and one AMG V-cycle on it ([`step::amg`]) |
+//! | Ã | the Newton matrix of [`step::NewtonKrylov`] | A with the Γ_C rows of stick (w_i = 0) and slip (ξ_i = a_i + B_i w_i) nodes |
+//! | A_ww, B⁻¹ | `VelocityAmg` | the velocity block of A, and one AMG V-cycle on it ([`step::VelocityAmg`]) |
 //! | ℳ, 𝒦_A, 𝒦_B, G, ℳ_θ, 𝒦_θ | `mass`, `viscosity`, `elasticity`, `coupling`, `heat_mass`, `conduction` | matrices of §2 of docs/model.md |
 //!
 //! ## The layer map

@@ -17,7 +17,7 @@ use std::cell::{Cell, OnceCell};
 use std::time::Instant;
 
 use crate::model::{Problem, State};
-use crate::step::direct::SystemStats;
+use crate::step::SystemStats;
 use crate::step::{LinearSystem, SolveError, SolverParams, StepError, StepFailure, StepInfo, StepSolver};
 
 /// Why the time loop stops on its own.

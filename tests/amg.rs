@@ -6,8 +6,8 @@
 
 use thermocontact::la::SolveInfo;
 use thermocontact::model::State;
-use thermocontact::step::direct::StepSystem;
-use thermocontact::step::iterative::KrylovSystem;
+use thermocontact::step::StepSystem;
+use thermocontact::step::KrylovSystem;
 use thermocontact::step::{KrylovParams, PreconditionerKind};
 use thermocontact::Scenario;
 

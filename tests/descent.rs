@@ -10,10 +10,10 @@ use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
 use thermocontact::model::norms;
 use thermocontact::model::Problem;
 use thermocontact::model::State;
-use thermocontact::step::descent::{descend, ContactStiffness, DescentParams, Start};
-use thermocontact::step::direct::StepSystem;
-use thermocontact::step::newton::{CondensedStep, NewtonParams};
-use thermocontact::step::paper::{PaperParams, PaperSolver};
+use thermocontact::step::{descend, ContactStiffness, DescentParams, Start};
+use thermocontact::step::StepSystem;
+use thermocontact::step::{CondensedStep, NewtonParams};
+use thermocontact::step::{PaperParams, PaperSolver};
 use thermocontact::Scenario;
 
 const NEWTON: NewtonParams = NewtonParams {

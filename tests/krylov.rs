@@ -4,7 +4,7 @@
 
 use thermocontact::la::{gmres, GmresParams, Ilu0};
 use thermocontact::model::{rows_of_symmetric_form, State};
-use thermocontact::step::direct::StepSystem;
+use thermocontact::step::StepSystem;
 use thermocontact::Scenario;
 
 fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {

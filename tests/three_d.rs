@@ -13,7 +13,7 @@ use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::model::contact_rows;
 use thermocontact::model::State;
-use thermocontact::step::direct::StepSystem;
+use thermocontact::step::StepSystem;
 use thermocontact::step::{LinearSystem, StepSolver};
 use thermocontact::Scenario;
 

@@ -127,7 +127,7 @@ impl Ilu0 {
     /// Factors rows `first..n` of A again after their values changed, rows before `first`
     /// unchanged: the rows of an ILU(0) depend only on the rows above them, so a matrix whose
     /// changing rows are ordered last is refactored in time proportional to those rows (the
-    /// contact rows of a Newton matrix, [`super::newton_krylov`]). From row 0, the two domains
+    /// contact rows of a Newton matrix, the iterative path of `crate::step`). From row 0, the two domains
     /// of [`Ilu0::with_domains`] are factored on two threads.
     pub fn refactor_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), Error> {
         let [first_end, second_end] = self.parts;

@@ -67,7 +67,7 @@ pub fn largest_eigenvalue<E>(n: usize, mut apply: impl FnMut(&[f64], &mut [f64])
 /// threads.
 const VECTOR_BLOCK: usize = 16_384;
 
-/// a · b, by blocks ([`VECTOR_BLOCK`]) in parallel: the same to the bit on any number of
+/// a · b, by blocks (`VECTOR_BLOCK`) in parallel: the same to the bit on any number of
 /// threads (the Krylov solver's inner products).
 pub fn par_dot(a: &[f64], b: &[f64]) -> f64 {
     let block = |(x, y): (&[f64], &[f64])| {

@@ -2,7 +2,7 @@
 //! and examples start from when the scenario file is not what they test. `scenarios/paper.toml`
 //! describes the same problem; a test below keeps the two the same to the bit.
 //!
-//! Depends on: [`super::problem`], [`crate::mesh`], [`crate::material`], [`crate::contact`],
+//! Depends on: the problem and its builder, [`crate::mesh`], [`crate::material`], [`crate::contact`],
 //! [`crate::loads`].
 
 use super::error::ModelError;

@@ -1,5 +1,5 @@
 //! The linear part of one time step of Problem 14: the step matrix and its right-hand side,
-//! shared by the direct path (`crate::step::direct::StepSystem`, which factors it) and the iterative
+//! shared by the direct path (`crate::step::StepSystem`, which factors it) and the iterative
 //! path ([`super::newton_krylov`], which preconditions it).
 //!
 //! With x = (W_n, Θ_n) on the unknowns of E^h × V^h:
@@ -69,7 +69,7 @@ impl StepMatrix {
 ///
 /// With `order` a permutation P, the columns are those of P S Pᵀ; S is symmetric, so they are
 /// also its rows, and row j of P A Pᵀ is column j negated where `order[j]` is a temperature
-/// unknown (the iterative path builds its CSR of A this way, [`super::newton_krylov`]). The
+/// unknown (the iterative path builds its CSR of A this way, `crate::step::KrylovSystem`). The
 /// triplet list this replaces took 24 bytes per entry of the full-dof matrices (2.3 GB at 10⁶
 /// unknowns) on top of the matrix.
 ///
@@ -264,7 +264,7 @@ impl StepRhs {
     }
 }
 
-/// A = J S from the symmetric form S = J A of the step matrix (`crate::step::direct::StepSystem`
+/// A = J S from the symmetric form S = J A of the step matrix (`crate::step::StepSystem`
 /// stores S), J = diag(I, −I) with the first `n_w` unknowns the velocities: S's columns are
 /// its rows, so A's rows are S's columns with the temperature rows negated.
 pub fn rows_of_symmetric_form(s: &CscMatrix, n_w: usize) -> CsrMatrix {

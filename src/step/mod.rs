@@ -3,37 +3,47 @@
 //! Depends on: [`crate::model`] (the problem, the state, the step matrix, the norms),
 //! [`crate::la`], [`crate::contact`] (the laws' projections).
 //!
-//! - **Back-ends.** [`direct`]: the step matrix factored once per step size (LDLᵀ) and each
-//!   step condensed onto Γ_C ([`condensed`]); [`iterative`]: the step matrix ordered with its
-//!   Γ_C rows last, ILU(0) (and an AMG correction, [`amg`]), GMRES on all unknowns.
-//! - **The loop.** [`convexification`]: the convexification loop of Problem 17, one function
+//! - **Back-ends.** [`StepSystem`]: the step matrix factored once per step size (LDLᵀ) and each
+//!   step condensed onto Γ_C ([`Condensation`]); [`KrylovSystem`]: the step matrix ordered with its
+//!   Γ_C rows last, ILU(0) (and an AMG correction, [`VelocityAmg`]), GMRES on all unknowns.
+//! - **The loop.** `convexification::convexify`: the convexification loop of Problem 17, one function
 //!   generic over its convex-problem solver and its stop test; every solver below runs it.
-//! - **Solvers.** [`paper`] (Uzawa inner iterations on Γ_C) and [`paper_krylov`] (the same on
-//!   the iterative back-end): `kind = "paper"`. [`fast`] (Newton on the condensed law, then the
-//!   loop with descent inner solves, then the descent of [`descent`]) and [`newton_krylov`] (the
+//! - **Solvers.** [`PaperSolver`] (Uzawa inner iterations on Γ_C) and [`PaperKrylov`] (the same on
+//!   the iterative back-end): `kind = "paper"`. [`FastSolver`] (Newton on the condensed law, then the
+//!   loop with descent inner solves, then the descent of [`descend`]) and [`NewtonKrylov`] (the
 //!   loop with semismooth-Newton inner solves on all unknowns): `kind = "fast"` on the two paths
-//!   ([`select`] says which is which).
+//!   ([`StepSolver`] says which is which).
 //! - **Figures and failures.** [`StepInfo`] per step, [`StepFailure`] (criterion, value,
 //!   tolerance) where a solver gives up, [`StepError`] for what stops a run.
 
-pub mod amg;
-pub mod condensed;
-pub mod convexification;
-pub mod descent;
-pub mod direct;
-pub mod fast;
-pub mod iterative;
-pub mod newton;
-pub mod newton_krylov;
-pub mod paper;
-pub mod paper_krylov;
-pub mod select;
+mod amg;
+mod condensed;
+mod convexification;
+mod descent;
+mod direct;
+mod fast;
+mod iterative;
+mod newton;
+mod newton_krylov;
+mod paper;
+mod paper_krylov;
+mod select;
 
 use serde::{Deserialize, Serialize};
 
 use crate::la::{GmresParams, LaError};
 use crate::model::ModelError;
 
+pub use amg::VelocityAmg;
+pub use condensed::Condensation;
+pub use descent::{descend, ContactStiffness, DescentParams, Start};
+pub use direct::{add_contact_terms, tangential_velocities, FreeStep, StepSystem, SystemStats};
+pub use fast::FastSolver;
+pub use iterative::KrylovSystem;
+pub use newton::{CondensedStep, NewtonParams, NewtonResult};
+pub use newton_krylov::NewtonKrylov;
+pub use paper::{PaperParams, PaperSolver};
+pub use paper_krylov::PaperKrylov;
 pub use select::{LinearSystem, StepSolver};
 
 /// What stops a step for good (no cutback helps): the linear algebra or the model's data.
@@ -56,7 +66,7 @@ pub struct KrylovParams {
     pub max_iterations: usize,
     /// GMRES restart length.
     pub restart: usize,
-    /// ILU(0) alone, or with the AMG coarse correction of the velocities ([`amg`]).
+    /// ILU(0) alone, or with the AMG coarse correction of the velocities ([`VelocityAmg`]).
     pub preconditioner: PreconditionerKind,
 }
 
@@ -145,10 +155,10 @@ impl SolverKind {
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum LinearKind {
-    /// The LDLᵀ factor of the step matrix, the step condensed onto Γ_C ([`direct`]).
+    /// The LDLᵀ factor of the step matrix, the step condensed onto Γ_C ([`StepSystem`]).
     Direct,
     /// GMRES + ILU(0) inside a Newton method on all unknowns, nothing condensed
-    /// ([`newton_krylov`]).
+    /// ([`NewtonKrylov`]).
     Iterative,
     /// [`LinearKind::Direct`] in 2D and for small 3D problems, iterative beyond
     /// ([`LinearKind::resolve`]).
@@ -184,7 +194,7 @@ impl LinearKind {
     /// against 30.4 s (and 2.3 GiB against 0.45 GiB); the 3D factor's fill grows like N^{4/3},
     /// the iterative path's cost per iteration like N. The paper's solver takes the direct path
     /// wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa iterate
-    /// ([`paper_krylov`]).
+    /// ([`PaperKrylov`]).
     pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
         match self {
             LinearKind::Auto if dim < 3 => LinearKind::Direct,
@@ -215,7 +225,7 @@ pub struct SolverParams {
     pub inner_tolerance: f64,
     /// Cap on inner Uzawa iterations per convex problem.
     pub max_inner: usize,
-    /// Cap on sweeps of the fast solver's descent ([`descent`]); 0 switches it off.
+    /// Cap on sweeps of the fast solver's descent ([`descend`]); 0 switches it off.
     pub max_sweeps: usize,
     /// Retry a step that fails as 2, 4, … substeps of k/2, k/4, … ([`crate::time::march`]).
     pub cutback: bool,
