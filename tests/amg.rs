@@ -5,23 +5,14 @@
 #![cfg(feature = "petsc")]
 
 use thermocontact::la::SolveInfo;
-use thermocontact::model::State;
+use thermocontact::model::{samples, State};
 use thermocontact::step::StepSystem;
 use thermocontact::step::KrylovSystem;
 use thermocontact::step::{KrylovParams, PreconditionerKind};
-use thermocontact::Scenario;
 
-const PAPER3D: &str = include_str!("../scenarios/paper3d.toml");
-
+/// The 3D example with nx × nx/4 × nx/4 cells.
 fn problem(nx: usize, steps: usize) -> thermocontact::model::Problem {
-    let ny = nx / 4;
-    let sets: Vec<String> = vec![
-        format!("mesh.nx={nx}"),
-        format!("mesh.ny={ny}"),
-        format!("mesh.nz={ny}"),
-        format!("time.steps={steps}"),
-    ];
-    Scenario::load(Some(PAPER3D), &sets).unwrap().build().unwrap()
+    samples::paper_3d([nx, nx / 4, nx / 4], steps).unwrap()
 }
 
 fn params(preconditioner: PreconditionerKind) -> KrylovParams {

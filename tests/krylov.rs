@@ -1,11 +1,10 @@
 //! The iterative linear solver (GMRES + ILU(0), `la`) against the direct LDLᵀ on
-//! the step matrix of a small 3D problem (`scenarios/paper3d.toml`, coarsened), at the paper's
+//! the step matrix of a small 3D problem (the 3D example of `model::samples`, coarsened), at the paper's
 //! time step and at a large one.
 
 use thermocontact::la::{gmres, GmresParams, Ilu0};
-use thermocontact::model::{rows_of_symmetric_form, State};
+use thermocontact::model::{rows_of_symmetric_form, samples, State};
 use thermocontact::step::StepSystem;
-use thermocontact::Scenario;
 
 fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
     let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -14,13 +13,8 @@ fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn iterative_and_direct_solves_agree_on_a_3d_step_matrix() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/paper3d.toml");
-    for steps in ["64", "8"] {
-        let overrides: Vec<String> = ["mesh.nx=12", "mesh.ny=4", "mesh.nz=4", &format!("time.steps={steps}")]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        let problem = Scenario::load_file(&path, &overrides).unwrap().build().unwrap();
+    for steps in [64, 8] {
+        let problem = samples::paper_3d([12, 4, 4], steps).unwrap();
         let system = StepSystem::new(&problem).unwrap();
         let n_w = system.n_w();
         let a = rows_of_symmetric_form(system.matrix(), n_w);

@@ -5,7 +5,7 @@ use faer::linalg::solvers::Solve;
 use thermocontact::contact::friction::law_residual;
 use thermocontact::la::LaError;
 use thermocontact::model::contact_rows;
-use thermocontact::model::State;
+use thermocontact::model::{samples, State};
 use thermocontact::step::Condensation;
 use thermocontact::step::{add_contact_terms, tangential_velocities, StepSystem};
 use thermocontact::step::{Criterion, SolveError, StepError};
@@ -71,7 +71,7 @@ fn frictionless_uncoupled_step_is_the_linear_viscoelastic_step() {
 /// The condensed compliances C and H reproduce full solves with arbitrary contact loads.
 #[test]
 fn condensation_matches_full_solves() {
-    let problem = coarse(&[]).build().unwrap();
+    let problem = samples::paper(16, 4, 64).unwrap();
     let system = StepSystem::new(&problem).unwrap();
     let cond = Condensation::new(&problem, &system).unwrap();
     let n_c = problem.contact.len();
@@ -189,7 +189,7 @@ fn non_convergence_names_the_failed_criterion_and_its_value() {
 /// counts the bad values.
 #[test]
 fn a_non_finite_solve_is_an_error() {
-    let problem = coarse(&[]).build().unwrap();
+    let problem = samples::paper(16, 4, 64).unwrap();
     let system = StepSystem::new(&problem).unwrap();
     let mut x = system
         .rhs(&problem, &State::initial(&problem), problem.time_step())
@@ -224,7 +224,7 @@ fn problems() -> Vec<(&'static str, thermocontact::Problem)> {
         root.join("tests/meshes/pad3d_coarse.msh").to_str().unwrap()
     );
     vec![
-        ("2D", coarse(&[]).build().unwrap()),
+        ("2D", samples::paper(16, 4, 64).unwrap()),
         (
             "2D, two contact faces",
             coarse(&[
