@@ -105,7 +105,7 @@ fn two_substeps_of_half_size_are_the_run_with_twice_the_steps() {
     let params = coarse_steps.solver_params();
     let levels = Levels::build(&problem, &params).unwrap();
     let half = levels.level(1).unwrap();
-    assert_eq!(half.step_size(), problem.time_step() / 2.0);
+    assert_eq!(half.time_step(), problem.time_step() / 2.0);
 
     let mut fine_states = Vec::new();
     thermocontact::time::run::<thermocontact::time::TimeError>(&fine_problem, &params, |state, _| {

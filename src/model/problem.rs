@@ -59,13 +59,13 @@ impl TimeGrid {
     }
 
     /// k = T/N.
-    pub fn step(&self) -> f64 {
+    pub fn time_step(&self) -> f64 {
         self.final_time / self.steps as f64
     }
 
     /// t_n = n k.
     pub fn time(&self, n: usize) -> f64 {
-        n as f64 * self.step()
+        n as f64 * self.time_step()
     }
 }
 
@@ -488,7 +488,7 @@ impl Problem {
 
     /// Time step k.
     pub fn time_step(&self) -> f64 {
-        self.time.step()
+        self.time.time_step()
     }
 
     /// Number of velocity unknowns.

@@ -194,7 +194,7 @@ pub fn assemble_by_columns(
 
 impl StepRhs {
     /// The step size k the matrix was made for.
-    pub fn step_size(&self) -> f64 {
+    pub fn time_step(&self) -> f64 {
         self.k
     }
 

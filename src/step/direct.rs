@@ -111,8 +111,8 @@ impl StepSystem {
     }
 
     /// The step size k the matrix was made for.
-    pub fn step_size(&self) -> f64 {
-        self.operator.step_size()
+    pub fn time_step(&self) -> f64 {
+        self.operator.time_step()
     }
 
     /// Number of unknowns.

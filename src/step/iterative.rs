@@ -113,7 +113,7 @@ fn ilu_needs_amg(
     order: &[usize],
     (a, ilu): (&CsrMatrix, &Ilu0),
 ) -> Result<bool, StepError> {
-    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.step_size())?;
+    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step())?;
     let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
     let mut x = vec![0.0; b.len()];
     let probe = KrylovParams {
@@ -204,8 +204,8 @@ impl KrylovSystem {
     }
 
     /// The step size k.
-    pub fn step_size(&self) -> f64 {
-        self.rhs.step_size()
+    pub fn time_step(&self) -> f64 {
+        self.rhs.time_step()
     }
 
     /// Stored entries of A and of its ILU(0) factor (the same pattern).

@@ -86,7 +86,7 @@ impl<'a> PaperSolver<'a> {
             free,
             w_free,
         };
-        let k = self.system.step_size();
+        let k = self.system.time_step();
         paper_step(
             self.problem,
             &self.params,

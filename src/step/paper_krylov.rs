@@ -77,7 +77,7 @@ impl<'a> PaperKrylov<'a> {
             residual: Vec::new(),
             krylov_iterations: 0,
         };
-        let k = sys.step_size();
+        let k = sys.time_step();
         let (state, mut info) = paper_step(
             problem,
             &self.params,

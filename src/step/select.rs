@@ -130,10 +130,10 @@ impl<'a> StepSolver<'a> {
     }
 
     /// The step size k of its linear system.
-    pub fn step_size(&self) -> f64 {
+    pub fn time_step(&self) -> f64 {
         match self.system() {
-            SystemRef::Direct(system) => system.step_size(),
-            SystemRef::Iterative(system) => system.step_size(),
+            SystemRef::Direct(system) => system.time_step(),
+            SystemRef::Iterative(system) => system.time_step(),
         }
     }
 
