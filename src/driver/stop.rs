@@ -3,12 +3,14 @@
 //!
 //! The flag is a plain atomic integer, so a signal handler may set it (an allocation or a lock
 //! there is undefined behaviour). The run then finishes the step it is on, writes its files and
-//! returns [`Error::Interrupted`](crate::Error::Interrupted).
+//! returns [`Error::Interrupted`] ([`Stop`], the run's observer of
+//! the flag).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
-use crate::error::Interruption;
+use crate::error::{Error, Interruption};
+use crate::model::State;
 
 /// A request to stop a run after the current step; clones share the flag.
 #[derive(Debug, Clone, Default)]
@@ -46,6 +48,23 @@ impl StopFlag {
     /// The value that stands for `cause` in [`StopFlag::atomic`].
     pub fn code(cause: Interruption) -> usize {
         CAUSES.iter().position(|&c| c == cause).expect("every cause is listed") + 1
+    }
+}
+
+/// The stop observer: the run's flag (if it has one), read after each step.
+pub(super) struct Stop<'a>(pub Option<&'a StopFlag>);
+
+impl Stop<'_> {
+    /// After the step that reached `state`: [`Error::Interrupted`] where a stop was requested.
+    pub fn step(&self, state: &State) -> Result<(), Error> {
+        match self.0.and_then(StopFlag::requested) {
+            Some(cause) => Err(Error::Interrupted {
+                step: state.n,
+                time: state.t,
+                cause,
+            }),
+            None => Ok(()),
+        }
     }
 }
 

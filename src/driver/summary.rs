@@ -5,11 +5,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
-use crate::time::TimeError;
-use crate::output::PvdEntry;
-use crate::model::State;
-use crate::step::{StepFailure, StepInfo};
 use crate::model::ContactRow;
+use crate::model::State;
+use crate::output::PvdEntry;
+use crate::step::{StepFailure, StepInfo};
+use crate::time::TimeError;
 
 /// Wall time per phase, in seconds.
 #[derive(Debug, Clone, Default, Serialize)]

@@ -27,12 +27,13 @@ use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
 
+use super::snapshot::write_snapshot;
 use super::summary::{OutputRecord, Tally};
-use super::{write_snapshot, OutputPlan};
+use super::OutputPlan;
 use crate::error::Error;
-use crate::output::{self, PvdEntry};
 use crate::model::Problem;
 use crate::model::State;
+use crate::output::{self, PvdEntry};
 
 /// Frames sent to the writer and not yet taken up, beyond the one it writes.
 pub const QUEUE: usize = 1;

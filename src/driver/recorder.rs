@@ -1,0 +1,225 @@
+//! The step recorder: each step's figures (a line of `steps.csv`) and the run's tally, the
+//! cutbacks, the linear work, the timings, and the summary they make with the set-up's report.
+
+use std::time::Instant;
+
+use super::summary::{AmgRecord, CutbackRecord, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings};
+use super::OutputPlan;
+use crate::model::Problem;
+use crate::model::State;
+use crate::step::{LinearKind, PreconditionerKind, SolverKind, SolverParams, StepInfo, StepSolver};
+use crate::time::Levels;
+
+/// The fixed part of a run's report: the linear path as set up.
+struct Report {
+    factor_nnz: usize,
+    /// The linear path taken.
+    linear: LinearKind,
+    /// The iterative path's preconditioner as set up.
+    preconditioner: Option<PreconditionerKind>,
+    amg: Option<AmgRecord>,
+}
+
+impl Report {
+    fn new(solver: &StepSolver) -> Self {
+        Report {
+            factor_nnz: solver.factor_nnz(),
+            linear: solver.linear(),
+            preconditioner: solver.preconditioner(),
+            amg: solver.amg().map(|amg| AmgRecord {
+                levels: amg.levels(),
+                operator_complexity: amg.operator_complexity(),
+            }),
+        }
+    }
+}
+
+/// The recorder observer: what the run reports, step by step.
+pub(super) struct Recorder<'a, 'p> {
+    problem: &'a Problem,
+    params: &'a SolverParams,
+    plan: &'a OutputPlan,
+    levels: &'a Levels<'p>,
+    report: Report,
+    /// The run's tally (a continued run's goes on from its checkpoint's).
+    pub tally: Tally,
+    /// The loop's linear work before this process (a continued run's checkpoint has it): the
+    /// tally adds this process's to it wherever it is saved.
+    solves_before: usize,
+    sweeps_before: usize,
+    timings: Timings,
+    /// When the run started, when the march did, and when the step under way did.
+    started: Instant,
+    marching: Instant,
+    step_clock: Instant,
+}
+
+impl<'a, 'p> Recorder<'a, 'p> {
+    /// The recorder of a run started at `started`, with `tally` so far and the set-up's
+    /// `timings`.
+    pub fn new(
+        problem: &'a Problem,
+        params: &'a SolverParams,
+        plan: &'a OutputPlan,
+        levels: &'a Levels<'p>,
+        tally: Tally,
+        timings: Timings,
+        started: Instant,
+    ) -> Self {
+        Recorder {
+            problem,
+            params,
+            plan,
+            levels,
+            report: Report::new(levels.first()),
+            solves_before: tally.solves,
+            sweeps_before: tally.sweeps,
+            tally,
+            timings,
+            started,
+            marching: started,
+            step_clock: started,
+        }
+    }
+
+    /// The march starts: its clock, and the first step's.
+    pub fn marching(&mut self) {
+        self.marching = Instant::now();
+        self.step_clock = self.marching;
+    }
+
+    /// Records the step that reached `state`: its `steps.csv` line (returned), its figures in
+    /// the tally, its cutback.
+    pub fn step(&mut self, state: &State, info: &StepInfo) -> StepRecord {
+        let problem = self.problem;
+        let (residual, slip_nodes) = law_residual(problem, state, self.plan.slip_tolerance);
+        let step = StepRecord {
+            n: state.n,
+            t: state.t,
+            convexification_iterations: info.convexification_iterations,
+            inner_iterations: info.inner_iterations,
+            newton_iterations: info.newton_iterations,
+            descent_sweeps: info.descent_sweeps,
+            krylov_iterations: info.krylov_iterations,
+            substeps: info.substeps,
+            cutback_depth: info.cutback_depth,
+            // Only the paper's solver measures (77)–(80); the fast solver stops on the nodal
+            // law and leaves them unset, which a 0 would misreport as converged.
+            increments: match self.params.kind {
+                SolverKind::Paper => info.increments,
+                SolverKind::Fast => [f64::NAN; 4],
+            },
+            law_residual: residual,
+            slip_nodes,
+            stick_nodes: problem.contact.len() - slip_nodes,
+            seconds: self.step_clock.elapsed().as_secs_f64(),
+        };
+        self.tally.add_step(info, step);
+        if info.cutback_depth > 0 {
+            self.tally.cutbacks.push(CutbackRecord {
+                step: state.n,
+                t: state.t,
+                depth: info.cutback_depth,
+                substeps: info.substeps,
+            });
+        }
+        step
+    }
+
+    /// The step's observers are done: the next step's clock starts.
+    pub fn next_step(&mut self) {
+        self.step_clock = Instant::now();
+    }
+
+    /// The march ended, having waited `waited` seconds for output: the time-stepping timings.
+    pub fn marched(&mut self, waited: f64) {
+        let timings = &mut self.timings;
+        timings.time_stepping = self.marching.elapsed().as_secs_f64() - waited;
+        let stats = self.levels.step_stats();
+        timings.linear_solves = stats.solve_seconds;
+        timings.right_hand_sides = stats.rhs_seconds;
+        timings.cutback_setup = self.levels.cutback_setup_seconds();
+        timings.contact_solver =
+            timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
+    }
+
+    /// The seconds spent on the frames themselves (on the writer's thread, or inline).
+    pub fn frames_written(&mut self, seconds: f64) {
+        self.timings.frames = seconds;
+    }
+
+    /// The linear work of the whole run so far into the tally.
+    pub fn count_work(&mut self) {
+        let stats = self.levels.step_stats();
+        self.tally.solves = self.solves_before + stats.solves;
+        self.tally.sweeps = self.sweeps_before + stats.sweeps;
+    }
+
+    /// The output time the run waited for so far, and the total time.
+    pub fn ended(&mut self, output: f64) {
+        self.timings.output = output;
+        self.timings.total = self.problem.build_seconds + self.started.elapsed().as_secs_f64();
+    }
+
+    /// The output time recorded so far ([`Recorder::ended`]).
+    pub fn output_seconds(&self) -> f64 {
+        self.timings.output
+    }
+
+    /// The run's summary as it stands.
+    pub fn summary(&self, status: RunStatus, failure: Option<FailureRecord>) -> Summary {
+        let (problem, tally, report) = (self.problem, &self.tally, &self.report);
+        Summary {
+            dim: problem.dim(),
+            nodes: problem.mesh.n_nodes(),
+            elements: problem.mesh.n_cells(),
+            velocity_unknowns: problem.velocity.n_free,
+            temperature_unknowns: problem.temperature.n_free,
+            unknowns: problem.n_unknowns(),
+            contact_nodes: problem.contact.len(),
+            steps: problem.time.steps,
+            time_step: problem.time_step(),
+            solver: self.params.kind.name().to_string(),
+            slip_tolerance: self.plan.slip_tolerance,
+            convexification_iterations: tally.convexification_iterations,
+            inner_iterations: tally.inner_iterations,
+            max_convexification_per_step: tally.max_convexification_per_step,
+            newton_iterations: tally.newton_iterations,
+            fallback_steps: tally.fallback_steps,
+            descent_steps: tally.descent_steps,
+            descent_sweeps: tally.descent_sweeps,
+            krylov_iterations: tally.krylov_iterations,
+            linear: report.linear.name().to_string(),
+            preconditioner: report.preconditioner.map(|p| p.name().to_string()),
+            amg: report.amg,
+            linear_solves: tally.solve_equivalents(),
+            full_sweeps: tally.full_sweeps(),
+            factor_nnz: report.factor_nnz,
+            peak_memory_mib: crate::resources::peak_memory_mib(),
+            max_law_residual: tally.max_law_residual,
+            cutbacks: tally.cutbacks.clone(),
+            status,
+            run_id: tally.run_id.clone(),
+            scenario_fingerprint: self.plan.fingerprint.clone(),
+            restarts: tally.restarts.clone(),
+            failure,
+            timings: self.timings.clone(),
+            outputs: tally.outputs.clone(),
+        }
+    }
+}
+
+/// The largest nodal friction-law residual of a state on Γ_C, relative to μ(0)S, and the
+/// number of Γ_C nodes that slip (|w_τ| > the slip tolerance, as in the contact CSV).
+fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> (f64, usize) {
+    let law = problem.friction.as_ref();
+    let tangential = problem.dim() - 1;
+    let w_tau = crate::model::contact_tangential(problem, &state.w);
+    let mut worst: f64 = 0.0;
+    let mut slip = 0;
+    for (w, xi) in w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential)) {
+        worst = worst.max(crate::contact::friction::law_residual(law, w, xi, slip_tolerance));
+        slip += usize::from(crate::la::vector::norm2(w) > slip_tolerance);
+    }
+    (worst / law.bound(0.0).max(f64::MIN_POSITIVE), slip)
+}
