@@ -6,8 +6,8 @@
 
 use thermocontact::la::SolveInfo;
 use thermocontact::model::{samples, State};
-use thermocontact::step::StepSystem;
 use thermocontact::step::KrylovSystem;
+use thermocontact::step::StepSystem;
 use thermocontact::step::{KrylovParams, PreconditionerKind};
 
 /// The 3D example with nx × nx/4 × nx/4 cells.

@@ -6,7 +6,7 @@
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LaError {
     /// A factorization failed.
-    #[error("factoring the matrix failed ({stage}: {detail}); the matrix is singular in floating point")]
+    #[error("factoring failed ({stage}: {detail}); the matrix is singular in floating point")]
     Factorization { stage: FactorStage, detail: String },
     /// A solve gave NaN or ±∞.
     #[error(

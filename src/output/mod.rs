@@ -1,21 +1,26 @@
 //! Output layer: VTK XML unstructured grids (`.vtu`) plus PVD collections for
-//! ParaView time series, CSV tables, and raw bytes (e.g. serialized JSON).
+//! ParaView time series, CSV tables, and raw bytes (e.g. serialized JSON); the run folder and
+//! its lock ([`folder`]), checkpoints ([`checkpoint`]), the fields of a state ([`fields`]) and
+//! the figures ([`figures`]).
 //!
-//! Every file goes through [`atomic::write_atomic`], so a crash or an error
+//! Every file goes through [`write_atomic`], so a crash or an error
 //! mid-write never leaves a truncated result behind: each output file is
 //! either the previous version or the complete new one.
+//!
+//! Depends on: [`crate::model`] (the state, the contact rows), [`crate::mesh`], [`crate::la`].
+//! It knows no time loop, step solver or driver: files only.
 
 use std::path::{Path, PathBuf};
 
-pub mod atomic;
+mod atomic;
 pub mod checkpoint;
-pub mod convergence_plot;
-pub mod csv;
+pub(crate) mod convergence_plot;
+mod csv;
 pub mod fields;
 pub mod figures;
 pub mod folder;
-pub mod plot;
-pub mod vtk;
+mod plot;
+mod vtk;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use csv::{csv_bytes, write_csv};

@@ -39,7 +39,7 @@ use super::OutputError;
 pub enum Compression {
     /// Raw little-endian arrays, base64-encoded.
     None,
-    /// `vtkZLibDataCompressor` at level [`ZLIB_LEVEL`], base64-encoded.
+    /// `vtkZLibDataCompressor` at level `ZLIB_LEVEL`, base64-encoded.
     Zlib,
 }
 

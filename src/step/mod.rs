@@ -49,8 +49,8 @@ pub use select::{LinearSystem, StepSolver};
 /// What stops a step for good (no cutback helps): the linear algebra or the model's data.
 #[derive(Debug, thiserror::Error)]
 pub enum StepError {
-    /// A factorization or solve of the linear algebra failed.
-    #[error(transparent)]
+    /// A factorization or solve of the step matrix (or its Newton linearization) failed.
+    #[error("the step matrix: {0}")]
     La(#[from] LaError),
     /// A load or datum could not be evaluated.
     #[error(transparent)]
