@@ -1,5 +1,7 @@
 //! The constitutive tensors of eq. (1) and (3): viscosity 𝒜, elasticity ℬ, thermal expansion
 //! C and conductivity K, all isotropic as in the paper's Section 6.
+//!
+//! Depends on: nothing of this crate.
 
 use serde::Serialize;
 

@@ -2,6 +2,8 @@
 //!
 //! The bilateral condition (7), u_ν = 0, is not a law but a constraint on the velocity space,
 //! posed in each node's frame ([`frames`]) and built into E^h by [`crate::fem::dofs`].
+//!
+//! Depends on: [`crate::mesh`] (the normals and tangents of the contact nodes).
 
 pub mod frames;
 pub mod friction;

@@ -9,6 +9,8 @@
 //!
 //! Full nodal numbering as in [`crate::fem::assembly`]: vector dof (p, c) ↦ p·d + c, scalar
 //! dof p ↦ p.
+//!
+//! Depends on: [`crate::mesh`], [`crate::fem`] (quadrature on simplices, the nodal numbering).
 
 mod datum;
 mod expression;

@@ -11,6 +11,8 @@
 //! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
+//!
+//! Depends on: nothing of this crate (the bottom layer, beside `resources`).
 
 mod annulus;
 pub mod chains;
