@@ -38,35 +38,21 @@ pub fn paper(nx: usize, ny: usize, steps: usize) -> Result<Problem, ModelError> 
 /// [`paper`] before its last step, for a test or a study that changes one part of it.
 pub fn paper_builder(nx: usize, ny: usize, steps: usize) -> ProblemBuilder {
     let mesh = mesh::rectangle(40.0, 10.0, nx, ny);
-    ProblemBuilder::new(mesh, paper_material(), TimeGrid::new(1.0, steps))
-        .dirichlet(&["left"])
-        .neumann(&["top", "right"])
-        .contact(&["bottom"])
-        .boundary_temperature(25.0)
-        .heat_exchange(QuadraticExchange {
-            coefficient: 2.0,
-            foundation_temperature: 0.0,
-        })
-        .frictional_heating(LinearHeating::affine(0.0, 10.0))
-        .initial_displacement(Datum::constant(vec![0.0, 0.0]), "initial.displacement")
-        .initial_velocity(Datum::constant(vec![0.0, 0.0]), "initial.velocity")
-        .initial_temperature(Datum::scalar(25.0), "initial.temperature")
-        .friction(SlipWeakening {
-            scale: 150.0,
-            a: 1.0,
-            b: 0.2,
-            alpha: 100.0,
-        })
-        .load(LoadTarget::BodyForce, Datum::affine(vec![0.0, -10.0], vec![0.0, 0.0]))
-        .load(LoadTarget::HeatSource, Datum::affine(vec![0.0], vec![0.0]))
-        .load(
-            LoadTarget::Traction("top".into()),
-            Datum::affine(vec![0.0, 0.0], vec![0.0, -800.0]),
-        )
-        .load(
-            LoadTarget::Traction("right".into()),
-            Datum::affine(vec![0.0, 0.0], vec![0.0, 0.0]),
-        )
+    with_paper_data(
+        ProblemBuilder::new(mesh, paper_material(), TimeGrid::new(1.0, steps)),
+        2,
+    )
+    .dirichlet(&["left"])
+    .neumann(&["top", "right"])
+    .contact(&["bottom"])
+    .load(
+        LoadTarget::Traction("top".into()),
+        Datum::affine(vec![0.0, 0.0], vec![0.0, -800.0]),
+    )
+    .load(
+        LoadTarget::Traction("right".into()),
+        Datum::affine(vec![0.0, 0.0], vec![0.0, 0.0]),
+    )
 }
 
 /// The 3D example (`scenarios/paper3d.toml`): the paper's slab as the box (0, 40) × (0, 10) ×
@@ -103,4 +89,30 @@ pub fn paper_3d(cells: [usize; 3], steps: usize) -> Result<Problem, ModelError> 
             Datum::affine(vec![0.0; 3], vec![0.0, 0.0, -800.0]),
         )
         .build()
+}
+
+/// The example's laws and data in `d` dimensions: θ_D = θ₀ = 25, heat exchange k_e = 2 against
+/// θ_R = 0, frictional heating 10 t r, the velocity-weakening law (S = 150, a = 1, b = 0.2,
+/// α = 100), u₀ = u₁ = 0, gravity −10 along the last axis, no heat source.
+fn with_paper_data(builder: ProblemBuilder, d: usize) -> ProblemBuilder {
+    let mut gravity = vec![0.0; d];
+    gravity[d - 1] = -10.0;
+    builder
+        .boundary_temperature(25.0)
+        .heat_exchange(QuadraticExchange {
+            coefficient: 2.0,
+            foundation_temperature: 0.0,
+        })
+        .frictional_heating(LinearHeating::affine(0.0, 10.0))
+        .initial_displacement(Datum::constant(vec![0.0; d]), "initial.displacement")
+        .initial_velocity(Datum::constant(vec![0.0; d]), "initial.velocity")
+        .initial_temperature(Datum::scalar(25.0), "initial.temperature")
+        .friction(SlipWeakening {
+            scale: 150.0,
+            a: 1.0,
+            b: 0.2,
+            alpha: 100.0,
+        })
+        .load(LoadTarget::BodyForce, Datum::affine(gravity, vec![0.0; d]))
+        .load(LoadTarget::HeatSource, Datum::affine(vec![0.0], vec![0.0]))
 }

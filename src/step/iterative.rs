@@ -243,6 +243,18 @@ impl KrylovSystem {
         }
     }
 
+    /// The start of a step from `previous` to time `t`, in this system's order: b (its linear
+    /// part, without the contact terms) and the previous step's unknowns, the first iterate.
+    pub(super) fn start(&self, problem: &Problem, previous: &State, t: f64) -> Result<(Vec<f64>, Vec<f64>), StepError> {
+        let clock = Instant::now();
+        let b_unordered = self.rhs.rhs(problem, previous, t)?;
+        let b: Vec<f64> = self.order.iter().map(|&o| b_unordered[o]).collect();
+        let x_previous = self.rhs.unknowns_of(problem, previous);
+        let x: Vec<f64> = self.order.iter().map(|&o| x_previous[o]).collect();
+        self.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
+        Ok((b, x))
+    }
+
     /// The step's right-hand side b (its linear part, without the contact terms) from
     /// `previous` to time `t`, in the unknowns' numbering: with [`KrylovSystem::solve`], the
     /// first step's system of studies and tests.

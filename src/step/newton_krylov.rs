@@ -226,12 +226,7 @@ impl<'a> NewtonKrylov<'a> {
         let sys = &self.system;
         let td = problem.dim() - 1;
         let n = sys.order.len();
-        let clock = Instant::now();
-        let b_unordered = sys.rhs.rhs(problem, previous, t)?;
-        let b: Vec<f64> = sys.order.iter().map(|&o| b_unordered[o]).collect();
-        let x_previous = sys.rhs.unknowns_of(problem, previous);
-        let x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
-        sys.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
+        let (b, x) = sys.start(problem, previous, t)?;
 
         let w = self.tangential(&x);
         let xi = previous.xi.clone();

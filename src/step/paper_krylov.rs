@@ -54,12 +54,7 @@ impl<'a> PaperKrylov<'a> {
     /// One step of the system's size k, from `previous` to the state at time `t`.
     pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let (problem, sys) = (self.problem, &self.system);
-        let clock = Instant::now();
-        let b_unordered = sys.rhs.rhs(problem, previous, t)?;
-        let b: Vec<f64> = sys.order.iter().map(|&o| b_unordered[o]).collect();
-        let x_previous = sys.rhs.unknowns_of(problem, previous);
-        let x: Vec<f64> = sys.order.iter().map(|&o| x_previous[o]).collect();
-        sys.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
+        let (b, x) = sys.start(problem, previous, t)?;
         let mut guard = sys.lock();
         let (a, ilu) = &mut *guard;
         let mut loaded = KrylovStep {

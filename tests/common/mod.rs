@@ -3,7 +3,7 @@
 
 use faer::linalg::solvers::Solve;
 use thermocontact::la::CscMatrix;
-use thermocontact::material::{Isotropic, Material};
+use thermocontact::material::Material;
 use thermocontact::Scenario;
 
 /// The paper's example on a coarse grid (16 × 4 cells, 16 steps) with `key=value` overrides.
@@ -15,15 +15,7 @@ pub fn coarse(overrides: &[&str]) -> Scenario {
 
 /// The material of the paper's Section 6 example.
 pub fn paper_material() -> Material {
-    Material {
-        density: 100.0,
-        heat_capacity: 0.1,
-        viscosity: Isotropic::viscosity(50.0, 200.0),
-        elasticity: Isotropic::elasticity(10_000.0, 0.3),
-        expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
-        conductivity: 0.5,
-        reference_temperature: 0.0,
-    }
+    thermocontact::model::samples::paper_material()
 }
 
 /// Solves K_ii x_i = −K_ib x_b (dense) for the nodes not marked fixed; `dofs` per node.
