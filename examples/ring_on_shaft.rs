@@ -19,7 +19,7 @@
 //! ```
 //! CI runs it at reduced size (`cargo test --example ring_on_shaft`).
 //!
-//! What to read first: `ProblemBuilder` in `src/problem.rs` (the parts a problem is made of),
+//! What to read first: `ProblemBuilder` in `src/model/problem.rs` (the parts a problem is made of),
 //! then `driver::run` (the time loop with output).
 
 use std::path::PathBuf;
