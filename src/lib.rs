@@ -68,8 +68,14 @@
 //! ```
 //!
 //! The public face for a user of the library: [`Problem`] and [`ProblemBuilder`] (or
-//! [`Scenario`] from TOML), [`SolverParams`], [`driver::run`] or [`time::march`] for a run,
-//! [`State`] for its fields, [`Error`] for what can fail.
+//! [`Scenario`] from TOML, or [`model::samples`] for the paper's example), [`SolverParams`],
+//! [`driver::run`] for a run with its files or [`time::march`] for the bare time loop, [`State`]
+//! for its fields and [`model::contact_rows`] for Γ_C, [`Error`] for what can fail. The Python
+//! bindings use this face and the front doors of `mesh`, `driver` and `output`. Each folder's
+//! `mod.rs` is its front door: submodules are private where nothing outside needs them, and
+//! what the layers above use is re-exported there. `la`, `fem`, `loads`, `contact` and the
+//! solvers of `step` are public for those who extend the crate (a law of their own, a
+//! back-end, a study), not promised as stable.
 
 pub mod contact;
 pub mod driver;
