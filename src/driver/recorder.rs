@@ -12,6 +12,8 @@ use crate::time::Levels;
 
 /// The fixed part of a run's report: the linear path as set up.
 struct Report {
+    /// The step solver's algorithm ([`StepSolver::algorithm`]).
+    algorithm: &'static str,
     factor_nnz: usize,
     /// The linear path taken.
     linear: LinearKind,
@@ -23,6 +25,7 @@ struct Report {
 impl Report {
     fn new(solver: &StepSolver) -> Self {
         Report {
+            algorithm: solver.algorithm(),
             factor_nnz: solver.factor_nnz(),
             linear: solver.linear(),
             preconditioner: solver.preconditioner(),
@@ -180,6 +183,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             steps: problem.time.steps,
             time_step: problem.time_step(),
             solver: self.params.kind.name().to_string(),
+            algorithm: report.algorithm.to_string(),
             slip_tolerance: self.plan.slip_tolerance,
             convexification_iterations: tally.convexification_iterations,
             inner_iterations: tally.inner_iterations,

@@ -80,6 +80,11 @@ pub struct Summary {
     pub steps: usize,
     pub time_step: f64,
     pub solver: String,
+    /// The algorithm that ran (`solver.kind` names one per linear path): `convexification-uzawa`
+    /// or `condensed-newton` on the direct path, `convexification-uzawa-krylov` or
+    /// `newton-krylov` on the iterative one.
+    #[serde(default)]
+    pub algorithm: String,
     pub slip_tolerance: f64,
     pub convexification_iterations: usize,
     pub inner_iterations: usize,

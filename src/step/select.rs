@@ -3,8 +3,11 @@
 //!
 //! | kind \ path | direct (LDLᵀ + condensation on Γ_C) | iterative (Newton matrix + GMRES) |
 //! |---|---|---|
-//! | `paper` | [`PaperSolver`]: the convexification loop, Uzawa inner iterations on Γ_C | [`PaperKrylov`]: the same loop, each Uzawa iterate a Krylov solve |
-//! | `fast` | [`FastSolver`]: Newton on the condensed law, the convexification loop with descent inner solves, the descent where both fail | [`NewtonKrylov`]: the convexification loop with semismooth-Newton inner solves on all unknowns |
+//! | `paper` | `convexification-uzawa` ([`PaperSolver`]): the convexification loop, Uzawa inner iterations on Γ_C | `convexification-uzawa-krylov` ([`PaperKrylov`]): the same loop and iterations, each Uzawa iterate a Krylov solve |
+//! | `fast` | `condensed-newton` ([`FastSolver`]): Newton on the condensed law, the convexification loop with descent inner solves, the descent where both fail | `newton-krylov` ([`NewtonKrylov`]): the convexification loop with semismooth-Newton inner solves on all unknowns, no descent |
+//!
+//! `paper` is one algorithm on both paths; `fast` means "the fastest solver of the path": two
+//! algorithms, with two names ([`StepSolver::algorithm`], `summary.json`'s `algorithm`).
 //!
 //! Depends on: the solvers of this folder, [`crate::model`].
 
@@ -110,6 +113,17 @@ impl<'a> StepSolver<'a> {
             StepSolver::Fast(solver) => SystemRef::Direct(solver.system()),
             StepSolver::NewtonKrylov(solver) => SystemRef::Iterative(solver.system()),
             StepSolver::PaperKrylov(solver) => SystemRef::Iterative(solver.system()),
+        }
+    }
+
+    /// The algorithm that runs, by its own name: `solver.kind` names one per linear path
+    /// (the table of this module's header), and a summary records which one ran.
+    pub fn algorithm(&self) -> &'static str {
+        match self {
+            StepSolver::Paper(_) => "convexification-uzawa",
+            StepSolver::PaperKrylov(_) => "convexification-uzawa-krylov",
+            StepSolver::Fast(_) => "condensed-newton",
+            StepSolver::NewtonKrylov(_) => "newton-krylov",
         }
     }
 
