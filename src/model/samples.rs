@@ -60,35 +60,18 @@ pub fn paper_builder(nx: usize, ny: usize, steps: usize) -> ProblemBuilder {
 /// z = 0, the 2D example's material, laws and gravity (0, 0, −10).
 pub fn paper_3d(cells: [usize; 3], steps: usize) -> Result<Problem, ModelError> {
     let mesh = mesh::cuboid([40.0, 10.0, 10.0], cells);
-    ProblemBuilder::new(mesh, paper_material(), TimeGrid::new(1.0, steps))
-        .dirichlet(&["x-"])
-        .neumann(&["x+", "y-", "y+", "z+"])
-        .contact(&["z-"])
-        .boundary_temperature(25.0)
-        .heat_exchange(QuadraticExchange {
-            coefficient: 2.0,
-            foundation_temperature: 0.0,
-        })
-        .frictional_heating(LinearHeating::affine(0.0, 10.0))
-        .initial_displacement(Datum::constant(vec![0.0; 3]), "initial.displacement")
-        .initial_velocity(Datum::constant(vec![0.0; 3]), "initial.velocity")
-        .initial_temperature(Datum::scalar(25.0), "initial.temperature")
-        .friction(SlipWeakening {
-            scale: 150.0,
-            a: 1.0,
-            b: 0.2,
-            alpha: 100.0,
-        })
-        .load(
-            LoadTarget::BodyForce,
-            Datum::affine(vec![0.0, 0.0, -10.0], vec![0.0; 3]),
-        )
-        .load(LoadTarget::HeatSource, Datum::affine(vec![0.0], vec![0.0]))
-        .load(
-            LoadTarget::Traction("z+".into()),
-            Datum::affine(vec![0.0; 3], vec![0.0, 0.0, -800.0]),
-        )
-        .build()
+    with_paper_data(
+        ProblemBuilder::new(mesh, paper_material(), TimeGrid::new(1.0, steps)),
+        3,
+    )
+    .dirichlet(&["x-"])
+    .neumann(&["x+", "y-", "y+", "z+"])
+    .contact(&["z-"])
+    .load(
+        LoadTarget::Traction("z+".into()),
+        Datum::affine(vec![0.0; 3], vec![0.0, 0.0, -800.0]),
+    )
+    .build()
 }
 
 /// The example's laws and data in `d` dimensions: θ_D = θ₀ = 25, heat exchange k_e = 2 against
