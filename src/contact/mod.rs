@@ -1,7 +1,7 @@
 //! The laws on the contact boundary Γ_C: friction (8), heat exchange and frictional heating (9).
 //!
 //! The bilateral condition (7), u_ν = 0, is not a law but a constraint on the velocity space,
-//! posed in each node's frame ([`frames`]) and built into E^h by [`crate::fem::dofs`].
+//! posed in each node's frame ([`frames`]) and built into E^h by the constrained spaces of `crate::fem`.
 //!
 //! Depends on: [`crate::mesh`] (the normals and tangents of the contact nodes).
 

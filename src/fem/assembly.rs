@@ -1,6 +1,6 @@
 //! Global assembly: scatter element kernels into matrices whose pattern comes from the node
 //! graph, and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature
-//! dof p ↦ p. Constraints are applied later by the spaces in [`super::dofs`].
+//! dof p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
 
 use rayon::prelude::*;
 

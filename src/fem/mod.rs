@@ -5,5 +5,5 @@
 //! [`crate::material`] (the tensors of the integrands).
 
 pub mod assembly;
-pub mod dofs;
-pub mod kernels;
+pub(crate) mod dofs;
+pub(crate) mod kernels;
