@@ -72,6 +72,15 @@ fn combine(tangents: &[[f64; 3]], coordinates: &[f64]) -> [f64; 3] {
     v
 }
 
+/// The friction bounds b(|w_i|) at the contact nodes, for w_τ node-major in tangent
+/// coordinates (d − 1 per node): the bounds a convexification iterate freezes.
+pub fn friction_bounds(problem: &Problem, w: &[f64]) -> Vec<f64> {
+    let td = problem.dim() - 1;
+    (0..problem.contact.len())
+        .map(|i| problem.friction.bound(norm2(&w[i * td..(i + 1) * td])))
+        .collect()
+}
+
 /// The contact rows of a state; a node slips when |w_τ| exceeds `slip_tolerance`.
 pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Vec<ContactRow> {
     let tangential = problem.dim() - 1;

@@ -18,7 +18,7 @@ pub mod samples;
 mod state;
 mod step_matrix;
 
-pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
+pub use contact_rows::{contact_rows, contact_tangential, friction_bounds, ContactRow};
 pub use error::ModelError;
 pub use problem::*;
 pub use state::State;

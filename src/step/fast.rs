@@ -27,7 +27,7 @@ use super::paper::{PaperParams, PaperSolver};
 use super::StepError as Error;
 use super::{Criterion, SolveError, StepFailure, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
-use crate::model::{contact_tangential, Problem, State};
+use crate::model::{contact_tangential, friction_bounds, Problem, State};
 
 /// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`]'s loop and to
 /// the descent.
@@ -303,9 +303,7 @@ impl ConvexSubproblem for CondensedConvex<'_, '_> {
         let (solver, step) = (self.solver, self.step);
         let t = step.tangential;
         let tolerance = solver.paper_params.tolerance;
-        let bounds: Vec<f64> = (0..solver.problem.contact.len())
-            .map(|i| solver.problem.friction.bound(norm(&iterate.w[i * t..(i + 1) * t])))
-            .collect();
+        let bounds = friction_bounds(solver.problem, &iterate.w);
         let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
         self.g_min = g_min;
         let Some(inner) = solver

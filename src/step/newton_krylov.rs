@@ -59,7 +59,7 @@ use super::newton::{node_law_residual, slip_linearization};
 use super::{Criterion, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::la::{CsrMatrix, Ilu0};
-use crate::model::{Problem, State};
+use crate::model::{friction_bounds, Problem, State};
 
 /// How one node is linearized.
 enum Linearized {
@@ -261,14 +261,6 @@ impl<'a> NewtonKrylov<'a> {
         Ok((state, info))
     }
 
-    /// The friction bounds b(|w_i|) at the contact nodes.
-    fn bounds_at(&self, w: &[f64]) -> Vec<f64> {
-        let td = self.problem.dim() - 1;
-        (0..self.problem.contact.len())
-            .map(|i| self.problem.friction.bound(norm(&w[i * td..(i + 1) * td])))
-            .collect()
-    }
-
     fn tangential(&self, x: &[f64]) -> Vec<f64> {
         let td = self.problem.dim() - 1;
         tangential(&self.system.nodes, td, x, self.problem.contact.len() * td)
@@ -321,7 +313,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         info: &mut StepInfo,
     ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
         let solver = self.solver;
-        let frozen = solver.bounds_at(&iterate.w);
+        let frozen = friction_bounds(solver.problem, &iterate.w);
         let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
         let (w_outer, xi_outer) = (iterate.w.clone(), iterate.xi.clone());
         self.inner_converged = false;
@@ -337,7 +329,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             }
         }
         let (w, xi) = (&iterate.w, &iterate.xi);
-        let bounds = solver.bounds_at(w);
+        let bounds = friction_bounds(solver.problem, w);
         let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
         let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let law = solver.law_residual(w, xi, &bounds);

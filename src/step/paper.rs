@@ -23,9 +23,10 @@ use super::direct::StepSystem;
 use super::StepError as Error;
 use super::{Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
+use crate::la::vector::norm2;
 use crate::model::norms::relative_increments;
 use crate::model::Problem;
-use crate::model::{contact_tangential, State};
+use crate::model::{contact_tangential, friction_bounds, State};
 
 /// Settings of the paper's solver.
 #[derive(Debug, Clone, Copy)]
@@ -153,7 +154,7 @@ pub(super) fn paper_step(
     let w = contact_tangential(problem, &previous.w);
     let tangential = problem.dim() - 1;
     let heat: Vec<f64> = (0..problem.contact.len())
-        .map(|i| problem.heating.heat(t, speed(&w, i, tangential)))
+        .map(|i| problem.heating.heat(t, norm2(&w[i * tangential..(i + 1) * tangential])))
         .collect();
     let iterate = PaperIterate {
         state,
@@ -177,15 +178,6 @@ pub(super) fn paper_step(
     let mut info = StepInfo::default();
     let iterate = convexify(&mut uzawa, iterate, &loop_params, &mut info)?;
     Ok((iterate.state, info))
-}
-
-/// |w_i| of node i's tangent coordinates in `w` (node-major, `tangential` per node).
-fn speed(w: &[f64], i: usize, tangential: usize) -> f64 {
-    w[i * tangential..(i + 1) * tangential]
-        .iter()
-        .map(|v| v * v)
-        .sum::<f64>()
-        .sqrt()
 }
 
 /// An iterate of the paper's loop: the full fields, and ξ, w_τ and h on Γ_C.
@@ -224,9 +216,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
         let n_contact = problem.contact.len();
         let PaperIterate { state, xi, w, heat } = iterate;
         // Problem 17_n^m: the bound frozen at the previous iterate.
-        let bounds: Vec<f64> = (0..n_contact)
-            .map(|i| problem.friction.bound(speed(w, i, tangential)))
-            .collect();
+        let bounds = friction_bounds(problem, w);
         let g_max = bounds.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
         let mut converged = false;
         let mut change = f64::INFINITY;
@@ -249,7 +239,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
             let mut heat_change: f64 = 0.0;
             let mut heat_scale: f64 = 0.0;
             for (i, h) in heat.iter_mut().enumerate() {
-                let new = problem.heating.heat(t, speed(w, i, tangential));
+                let new = problem.heating.heat(t, norm2(&w[i * tangential..(i + 1) * tangential]));
                 heat_change = heat_change.max((new - *h).abs());
                 heat_scale = heat_scale.max(new.abs());
                 *h = new;
