@@ -49,9 +49,13 @@ use std::fmt;
 use exmex::prelude::*;
 use exmex::{literal_matcher_from_pattern, FloatOpsFactory, MatchLiteral};
 
-/// The variables an expression may use, in the order of [`Expression::eval`]'s point (x, y, z)
-/// followed by t.
-const VARIABLES: [&str; 4] = ["x", "y", "z", "t"];
+/// Every variable an expression may use: the point (x, y, z) and t, which every expression
+/// may use, then the arguments of the laws on Γ_C, which only the laws allow
+/// ([`Expression::parse_with`]): the slip rate r and the temperature θ (`theta`).
+const VARIABLES: [&str; 6] = ["x", "y", "z", "t", "r", "theta"];
+
+/// The number of variables every expression may use (x, y, z, t).
+const SPACE_TIME: usize = 4;
 
 /// The functions of the grammar: our name, exmex's name, number of arguments.
 const FUNCTIONS: [(&str, &str, usize); 18] = [
@@ -92,8 +96,8 @@ pub enum ExpressionError {
     #[error("cannot parse the expression `{text}`: {message}")]
     Parse { text: String, message: String },
     /// A name that is neither a variable nor a constant.
-    #[error("unknown variable `{name}` in the expression `{text}` (the variables are x, y, z and t; the constants pi and e)")]
-    UnknownVariable { text: String, name: String },
+    #[error("unknown variable `{name}` in the expression `{text}` (the variables are {allowed}; the constants pi and e)")]
+    UnknownVariable { text: String, name: String, allowed: String },
     /// A name called as a function that is not one.
     #[error("unknown function `{name}` in the expression `{text}` (the functions are sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, exp, log, ln, log10, sqrt, abs, min, max, atan2)")]
     UnknownFunction { text: String, name: String },
@@ -122,24 +126,36 @@ pub enum ExpressionError {
 pub struct Expression {
     text: String,
     body: Body,
-    /// Which of x, y, z, t occur.
-    uses: [bool; 4],
+    /// Which of [`VARIABLES`] occur.
+    uses: [bool; 6],
 }
 
 #[derive(Clone)]
 enum Body {
     /// No variable occurs: evaluated once at parse time.
     Constant(f64),
-    /// exmex takes the values of the variables it found in alphabetical order (t, x, y, z);
-    /// `slots[k]` is the index in (x, y, z, t) of its k-th one.
+    /// exmex takes the values of the variables it found in alphabetical order (r, t, theta, x,
+    /// y, z); `slots[k]` is the index in [`VARIABLES`] of its k-th one.
     Compiled { compiled: Box<Compiled>, slots: Vec<usize> },
 }
 
 impl Expression {
-    /// Parses `text`, checks every name, and compiles it once.
+    /// Parses `text`, an expression of x, y, z and t; checks every name, and compiles it once.
     pub fn parse(text: &str) -> Result<Expression, ExpressionError> {
-        let node = Parser::new(text)?.parse()?;
-        let mut uses = [false; 4];
+        Self::parse_with(text, &[])
+    }
+
+    /// Parses `text`, an expression of x, y, z, t and the further variables `extra` (each `r`,
+    /// the slip rate, or `theta`, the temperature: the arguments of a law on Γ_C).
+    pub fn parse_with(text: &str, extra: &[&str]) -> Result<Expression, ExpressionError> {
+        let mut allowed = [false; VARIABLES.len()];
+        allowed[..SPACE_TIME].fill(true);
+        for name in extra {
+            let k = VARIABLES.iter().position(|v| v == name).expect("a variable of VARIABLES");
+            allowed[k] = true;
+        }
+        let node = Parser::new(text, allowed)?.parse()?;
+        let mut uses = [false; VARIABLES.len()];
         node.mark_variables(&mut uses);
         let body = if uses.iter().any(|&u| u) {
             let canonical = node.canonical();
@@ -167,15 +183,47 @@ impl Expression {
         })
     }
 
+    /// The partial derivative with respect to `variable` (one of x, y, z, t, r, theta), by
+    /// exmex's symbolic differentiation; `None` where the expression uses a function exmex does
+    /// not differentiate (`abs`, `min`, `max`, `atan2`). The derivative takes the same
+    /// arguments as the expression.
+    pub fn derivative(&self, variable: &str) -> Option<Expression> {
+        let k = VARIABLES.iter().position(|v| *v == variable)?;
+        let text = format!("d/d{variable} ({})", self.text);
+        let body = match &self.body {
+            Body::Compiled { compiled, slots } if self.uses[k] => {
+                let index = slots.iter().position(|&s| s == k)?;
+                let derivative = compiled.as_ref().clone().partial(index).ok()?;
+                Body::Compiled {
+                    compiled: Box::new(derivative),
+                    slots: slots.clone(),
+                }
+            }
+            _ => Body::Constant(0.0),
+        };
+        Some(Expression {
+            text,
+            body,
+            uses: self.uses,
+        })
+    }
+
     /// The value at the point `x` and time `t`. IEEE semantics: `1/0` is +∞, `sqrt(-1)` is NaN
     /// (the loads check for non-finite values).
     #[inline]
     pub fn eval(&self, x: [f64; 3], t: f64) -> f64 {
+        self.eval_with(x, t, [0.0; 2])
+    }
+
+    /// The value at the point `x`, time `t` and `laws` = (r, θ): the slip rate and the
+    /// temperature, for an expression parsed by [`Expression::parse_with`].
+    #[inline]
+    pub fn eval_with(&self, x: [f64; 3], t: f64, laws: [f64; 2]) -> f64 {
         match &self.body {
             Body::Constant(value) => *value,
             Body::Compiled { compiled, slots } => {
-                let all = [x[0], x[1], x[2], t];
-                let mut values = [0.0; 4];
+                let all = [x[0], x[1], x[2], t, laws[0], laws[1]];
+                let mut values = [0.0; VARIABLES.len()];
                 for (value, &slot) in values.iter_mut().zip(slots) {
                     *value = all[slot];
                 }
@@ -184,6 +232,11 @@ impl Expression {
                 compiled.eval(&values[..slots.len()]).unwrap_or(f64::NAN)
             }
         }
+    }
+
+    /// Whether `variable` (one of x, y, z, t, r, theta) occurs.
+    pub fn uses(&self, variable: &str) -> bool {
+        VARIABLES.iter().position(|v| *v == variable).is_some_and(|k| self.uses[k])
     }
 
     /// Whether any of x, y, z occurs.
@@ -227,7 +280,7 @@ enum Node {
 }
 
 impl Node {
-    fn mark_variables(&self, uses: &mut [bool; 4]) {
+    fn mark_variables(&self, uses: &mut [bool; VARIABLES.len()]) {
         match self {
             Node::Number(_) => {}
             Node::Variable(k) => uses[*k] = true,
@@ -320,13 +373,15 @@ enum Token<'a> {
 /// A recursive-descent parser over the tokens of the text.
 struct Parser<'a> {
     text: &'a str,
+    /// Which of [`VARIABLES`] this expression may use.
+    allowed: [bool; VARIABLES.len()],
     /// Tokens with the byte offset where each starts.
     tokens: Vec<(Token<'a>, usize)>,
     next: usize,
 }
 
 impl<'a> Parser<'a> {
-    fn new(text: &'a str) -> Result<Self, ExpressionError> {
+    fn new(text: &'a str, allowed: [bool; VARIABLES.len()]) -> Result<Self, ExpressionError> {
         let bytes = text.as_bytes();
         let mut tokens = Vec::new();
         let mut i = 0;
@@ -387,7 +442,12 @@ impl<'a> Parser<'a> {
             }
         }
         tokens.push((Token::End, text.len()));
-        Ok(Parser { text, tokens, next: 0 })
+        Ok(Parser {
+            text,
+            allowed,
+            tokens,
+            next: 0,
+        })
     }
 
     fn parse(mut self) -> Result<Node, ExpressionError> {
@@ -469,7 +529,7 @@ impl<'a> Parser<'a> {
             Token::Name(name) => {
                 self.next += 1;
                 let called = self.peek() == Token::Symbol('(');
-                if let Some(k) = VARIABLES.iter().position(|v| *v == name) {
+                if let Some(k) = (VARIABLES.iter().position(|v| *v == name)).filter(|&k| self.allowed[k]) {
                     if called {
                         return Err(parse_error(
                             self.text,
@@ -503,6 +563,7 @@ impl<'a> Parser<'a> {
                     None => Err(ExpressionError::UnknownVariable {
                         text: self.text.to_string(),
                         name: name.to_string(),
+                        allowed: self.allowed_names(),
                     }),
                 }
             }
@@ -530,6 +591,15 @@ impl<'a> Parser<'a> {
             });
         }
         Ok(Node::Call(f, args))
+    }
+
+    /// "x, y, z and t" (and the law's variables).
+    fn allowed_names(&self) -> String {
+        let names: Vec<&str> = (VARIABLES.iter().zip(self.allowed))
+            .filter_map(|(v, a)| a.then_some(*v))
+            .collect();
+        let (last, rest) = names.split_last().expect("x, y, z, t always allowed");
+        format!("{} and {last}", rest.join(", "))
     }
 
     fn expect(&mut self, symbol: char, message: &str) -> Result<(), ExpressionError> {
@@ -632,7 +702,8 @@ mod tests {
             err,
             ExpressionError::UnknownVariable {
                 text: "q*x".into(),
-                name: "q".into()
+                name: "q".into(),
+                allowed: "x, y, z and t".into()
             }
         );
         let message = err.to_string();
@@ -686,6 +757,45 @@ mod tests {
             Expression::parse("sqrt(x, y)"),
             Err(ExpressionError::Arity { .. })
         ));
+    }
+
+    #[test]
+    fn law_variables_only_where_allowed() {
+        let mu = Expression::parse_with("0.8*exp(-100*r) + 0.2 + 0*theta*x", &["r", "theta"]).unwrap();
+        assert!(mu.uses("r") && mu.uses("theta") && !mu.uses("t"));
+        assert!((mu.eval_with([1.0, 0.0, 0.0], 0.0, [0.01, 5.0]) - (0.8 * (-1.0f64).exp() + 0.2)).abs() < 1e-15);
+        // A load may not use r: the error lists what it may use.
+        let err = Expression::parse("r*x").unwrap_err();
+        assert!(err.to_string().contains("x, y, z and t"), "{err}");
+        let err = Expression::parse_with("theta", &["r"]).unwrap_err();
+        assert!(err.to_string().contains("x, y, z, t and r"), "{err}");
+    }
+
+    #[test]
+    fn symbolic_derivatives_agree_with_differences() {
+        let cases = [
+            "0.8*exp(-100*r) + 0.2",
+            "0.5*theta - 5*sin(theta/5)",
+            "x*r^2 + t*sqrt(1 + r)",
+            "tanh(3*r)/(1 + r^1.5)",
+        ];
+        for text in cases {
+            let f = Expression::parse_with(text, &["r", "theta"]).unwrap();
+            let variable = if f.uses("theta") { "theta" } else { "r" };
+            let df = f.derivative(variable).expect("differentiable");
+            for v in [0.003, 0.4, 2.5] {
+                let at = |v: f64| if variable == "r" { [v, 0.0] } else { [0.0, v] };
+                let h = 1e-6 * (1.0 + v);
+                let fd = (f.eval_with([0.3, 0.0, 0.0], 0.7, at(v + h)) - f.eval_with([0.3, 0.0, 0.0], 0.7, at(v - h)))
+                    / (2.0 * h);
+                let exact = df.eval_with([0.3, 0.0, 0.0], 0.7, at(v));
+                assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{text} at {v}: {exact} vs {fd}");
+            }
+        }
+        // Constant in r: derivative 0; abs has no symbolic derivative in exmex.
+        let g = Expression::parse_with("x + t", &["r"]).unwrap();
+        assert_eq!(g.derivative("r").unwrap().eval_with([1.0, 0.0, 0.0], 1.0, [0.5, 0.0]), 0.0);
+        assert!(Expression::parse_with("abs(r - 1)", &["r"]).unwrap().derivative("r").is_none());
     }
 
     #[test]
