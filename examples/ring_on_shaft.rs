@@ -24,7 +24,7 @@
 
 use std::path::PathBuf;
 
-use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
+use thermocontact::contact::{LinearHeating, QuadraticExchange, VelocityWeakening};
 use thermocontact::driver::{self, OutputPlan, RunOptions, Summary};
 use thermocontact::loads::Datum;
 use thermocontact::material::{Isotropic, Material};
@@ -77,8 +77,7 @@ fn solve(ring: &Ring, n_radial: usize, n_around: usize, steps: usize, out: Optio
     //    integrated at quadrature points.
     let shear = format!("{}*t/sqrt(x^2+y^2)", ring.shear_rate);
     let traction = Datum::expressions(&[format!("-y*{shear}"), format!("x*{shear}")]).expect("valid expressions");
-    let friction = SlipWeakening {
-        scale: ring.bound,
+    let friction = VelocityWeakening {
         a: 1.0,
         b: 0.5,
         alpha: 10.0,
@@ -88,7 +87,7 @@ fn solve(ring: &Ring, n_radial: usize, n_around: usize, steps: usize, out: Optio
         .contact(&["inner"])
         .boundary_temperature(20.0)
         .initial_temperature(Datum::scalar(20.0), "θ₀")
-        .friction(friction)
+        .friction(ring.bound, friction)
         .heat_exchange(QuadraticExchange {
             coefficient: 2.0,
             foundation_temperature: 20.0,

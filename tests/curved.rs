@@ -3,7 +3,7 @@
 
 mod common;
 
-use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
+use thermocontact::contact::{LinearHeating, QuadraticExchange, VelocityWeakening};
 use thermocontact::loads::Datum;
 use thermocontact::mesh::{self, Mesh};
 use thermocontact::model::contact_rows;
@@ -50,12 +50,14 @@ fn paper_problem(mesh: Mesh, r: &Rotation, parts: &[&str], contact: &str, steps:
         .contact(&[contact])
         .boundary_temperature(25.0)
         .initial_temperature(Datum::scalar(25.0), "θ₀")
-        .friction(SlipWeakening {
-            scale: 150.0,
-            a: 1.0,
-            b: 0.2,
-            alpha: 100.0,
-        })
+        .friction(
+            150.0,
+            VelocityWeakening {
+                a: 1.0,
+                b: 0.2,
+                alpha: 100.0,
+            },
+        )
         .heat_exchange(QuadraticExchange {
             coefficient: 2.0,
             foundation_temperature: 0.0,
@@ -170,12 +172,14 @@ fn ring_on_shaft(n_radial: usize, n_around: usize) -> RingRun {
     let problem = ProblemBuilder::new(mesh, material, TimeGrid::new(0.75, 30))
         .neumann(&["outer"])
         .contact(&["inner"])
-        .friction(SlipWeakening {
-            scale: bound,
-            a: 1.0,
-            b: 0.5,
-            alpha: 10.0,
-        })
+        .friction(
+            bound,
+            VelocityWeakening {
+                a: 1.0,
+                b: 0.5,
+                alpha: 10.0,
+            },
+        )
         .load(LoadTarget::Traction("outer".into()), traction)
         .build()
         .unwrap();

@@ -8,8 +8,7 @@ mod common;
 use common::coarse;
 use thermocontact::driver::{self, OutputPlan, RunOptions, RunStatus};
 use thermocontact::model::norms;
-use thermocontact::model::Problem;
-use thermocontact::model::State;
+use thermocontact::model::{ContactLaws, Problem, State};
 use thermocontact::step::StepSystem;
 use thermocontact::step::{descend, ContactStiffness, DescentParams, Start};
 use thermocontact::step::{CondensedStep, NewtonParams};
@@ -37,8 +36,9 @@ fn with_step_six(scenario: &Scenario, check: impl FnOnce(&CondensedStep, &Contac
     let t = 6.0 * problem.time_step();
     let system = StepSystem::new(&problem).unwrap();
     let paper = PaperSolver::new(&problem, StepSystem::new(&problem).unwrap(), paper_params()).unwrap();
-    let free = system.free_step(&problem, previous, t).unwrap();
-    let step = condensed(&problem, &paper, t);
+    let free = system.free_step(&problem, previous, t, None).unwrap();
+    let laws = ContactLaws::new(&problem, t, &previous.slip_distance).unwrap();
+    let step = condensed(&laws, &paper, problem.dim());
     let stiffness = stiffness(&problem, &paper);
     let w_previous = thermocontact::model::contact_tangential(&problem, &previous.w);
     check(&step, &stiffness, &free.w_free, &w_previous);
@@ -53,12 +53,11 @@ fn paper_params() -> PaperParams {
     }
 }
 
-fn condensed<'a>(problem: &'a Problem, paper: &'a PaperSolver, t: f64) -> CondensedStep<'a> {
+fn condensed<'a>(laws: &'a ContactLaws<'a>, paper: &'a PaperSolver, dim: usize) -> CondensedStep<'a> {
     CondensedStep {
         condensation: paper.condensation(),
-        friction: problem.friction.as_ref(),
-        heat_rate: problem.heating.heat(t, 1.0),
-        tangential: problem.dim() - 1,
+        laws,
+        tangential: dim - 1,
         augmentation: paper.augmentation,
         lu_cache: Default::default(),
     }
@@ -150,7 +149,7 @@ fn with_a_steep_law_the_descent_reaches_a_solution_from_any_start() {
             .unwrap();
             let (e1, e2) = step.residuals(w_free, &result.w, &result.xi, None);
             let g_min = (0..result.w.len())
-                .map(|i| step.friction.bound(result.w[i].abs()))
+                .map(|i| step.laws.bound(i, result.w[i].abs()))
                 .fold(f64::INFINITY, f64::min);
             let w_scale = max_abs(&result.w).max(max_abs(w_free));
             assert!(e1 <= 1e-9 * w_scale, "condensed equations: {e1:e} against {w_scale:e}");

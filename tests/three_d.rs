@@ -8,7 +8,7 @@ use common::{paper_material, solve_interior};
 use std::path::PathBuf;
 use std::process::Command;
 
-use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, SlipWeakening};
+use thermocontact::contact::friction::{law_residual, project_to_ball, FrictionLaw, LawPoint, VelocityWeakening};
 use thermocontact::fem::assembly::{assemble_matrices, boundary_weights};
 use thermocontact::mesh::{cuboid, Mesh};
 use thermocontact::model::contact_rows;
@@ -149,20 +149,22 @@ fn masses_volume_and_contact_weights_sum_in_3d() {
 /// boundary and opposite to the slip direction, ξ = −μ(|w|)S w/|w|, when w ≠ 0.
 #[test]
 fn disc_friction_law_sticks_inside_and_slips_against_the_direction() {
-    let law = SlipWeakening {
-        scale: 150.0,
+    let paper = VelocityWeakening {
         a: 1.0,
         b: 0.2,
         alpha: 100.0,
     };
+    let at = LawPoint::default();
+    let bound = |r: f64| paper.bound(150.0, &at, r);
+    let law = &bound;
     // Stick: anywhere inside the disc of radius 150, not outside.
-    assert_eq!(law_residual(&law, &[0.0, 0.0], &[100.0, -100.0], 1e-12), 0.0);
-    assert!(law_residual(&law, &[0.0, 0.0], &[120.0, -100.0], 1e-12) > 1.0);
+    assert_eq!(law_residual(law, &[0.0, 0.0], &[100.0, -100.0], 1e-12), 0.0);
+    assert!(law_residual(law, &[0.0, 0.0], &[120.0, -100.0], 1e-12) > 1.0);
     // Slip along (3, −4)/5 at rate 0.01: ξ = −μ(0.01) S (3, −4)/5, and no other direction.
-    let (w, b) = ([0.006, -0.008], law.bound(0.01));
-    assert!(law_residual(&law, &w, &[-0.6 * b, 0.8 * b], 1e-12) < 1e-12);
-    assert!(law_residual(&law, &w, &[-0.8 * b, 0.6 * b], 1e-12) > 0.2 * b);
-    assert!(law_residual(&law, &w, &[-0.6 * law.bound(0.0), 0.8 * law.bound(0.0)], 1e-12) > 1.0);
+    let (w, b) = ([0.006, -0.008], bound(0.01));
+    assert!(law_residual(law, &w, &[-0.6 * b, 0.8 * b], 1e-12) < 1e-12);
+    assert!(law_residual(law, &w, &[-0.8 * b, 0.6 * b], 1e-12) > 0.2 * b);
+    assert!(law_residual(law, &w, &[-0.6 * bound(0.0), 0.8 * bound(0.0)], 1e-12) > 1.0);
     // The fixed-point form ξ = P_g(ξ − r w) projects onto the disc, radially.
     let mut trial = [300.0, -400.0];
     project_to_ball(&mut trial, b);
@@ -190,7 +192,8 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
     let problem = scenario.build().unwrap();
     let system = StepSystem::new(&problem).unwrap();
     let solver = StepSolver::new(&problem, LinearSystem::Direct(system), &scenario.solver_params()).unwrap();
-    let law = problem.friction.as_ref();
+    let bound = |r: f64| problem.friction_bound([0.0; 3], 0.0, r);
+    let law = &bound;
     let tol = scenario.solver.slip_tolerance;
     let mut state = State::initial(&problem);
     let (mut slip, mut stick, mut oblique) = (0, 0, 0);
@@ -199,7 +202,7 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
         for row in contact_rows(&problem, &state, tol) {
             let residual = law_residual(law, &row.w_tau, &row.xi, tol);
             assert!(
-                residual <= 1e-6 * law.bound(0.0),
+                residual <= 1e-6 * bound(0.0),
                 "law violated at node {} (n = {}): {residual:e}",
                 row.node,
                 state.n
@@ -216,7 +219,7 @@ fn oblique_3d_run_obeys_the_disc_law_at_every_contact_node() {
                 }
             } else {
                 stick += 1;
-                assert!(size <= law.bound(0.0) * (1.0 + 1e-9));
+                assert!(size <= bound(0.0) * (1.0 + 1e-9));
             }
         }
     }

@@ -3,11 +3,22 @@
 //! The bilateral condition (7), u_ν = 0, is not a law but a constraint on the velocity space,
 //! posed in each node's frame ([`frames`]) and built into E^h by the constrained spaces of `crate::fem`.
 //!
-//! Depends on: [`crate::mesh`] (the normals and tangents of the contact nodes).
+//! Depends on: [`crate::mesh`] (the normals and tangents of the contact nodes), [`crate::loads`]
+//! (the expressions of the user's laws).
 
 pub mod frames;
 pub mod friction;
 pub mod heat;
+pub mod table;
 
-pub use friction::{project_to_ball, FrictionLaw, SlipWeakening, Tresca};
-pub use heat::{FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange};
+#[allow(deprecated)]
+pub use friction::SlipWeakening;
+pub use friction::{
+    project_to_ball, ExpressionFriction, FrictionLaw, LawPoint, SlipDistanceWeakening, TabulatedFriction, Tresca,
+    VelocityWeakening,
+};
+pub use heat::{
+    ExpressionExchange, ExpressionHeating, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange,
+    TabulatedExchange,
+};
+pub use table::{Table, TableError};

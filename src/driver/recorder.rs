@@ -215,15 +215,25 @@ impl<'a, 'p> Recorder<'a, 'p> {
 
 /// The largest nodal friction-law residual of a state on Γ_C, relative to μ(0)S, and the
 /// number of Γ_C nodes that slip (|w_τ| > the slip tolerance, as in the contact CSV).
+///
+/// The law is the one the step solved (its time, the slip distances before it).
 fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> (f64, usize) {
-    let law = problem.friction.as_ref();
     let tangential = problem.dim() - 1;
     let w_tau = crate::model::contact_tangential(problem, &state.w);
     let mut worst: f64 = 0.0;
     let mut slip = 0;
-    for (w, xi) in w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential)) {
-        worst = worst.max(crate::contact::friction::law_residual(law, w, xi, slip_tolerance));
+    let Ok(laws) = crate::model::ContactLaws::of_state(problem, state) else {
+        return (f64::NAN, 0);
+    };
+    let chunks = w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential));
+    for (i, (w, xi)) in chunks.enumerate() {
+        worst = worst.max(crate::contact::friction::law_residual(
+            |r| laws.bound(i, r),
+            w,
+            xi,
+            slip_tolerance,
+        ));
         slip += usize::from(crate::la::vector::norm2(w) > slip_tolerance);
     }
-    (worst / law.bound(0.0).max(f64::MIN_POSITIVE), slip)
+    (worst / laws.largest_bound_at_rest().max(f64::MIN_POSITIVE), slip)
 }

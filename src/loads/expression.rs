@@ -96,8 +96,14 @@ pub enum ExpressionError {
     #[error("cannot parse the expression `{text}`: {message}")]
     Parse { text: String, message: String },
     /// A name that is neither a variable nor a constant.
-    #[error("unknown variable `{name}` in the expression `{text}` (the variables are {allowed}; the constants pi and e)")]
-    UnknownVariable { text: String, name: String, allowed: String },
+    #[error(
+        "unknown variable `{name}` in the expression `{text}` (the variables are {allowed}; the constants pi and e)"
+    )]
+    UnknownVariable {
+        text: String,
+        name: String,
+        allowed: String,
+    },
     /// A name called as a function that is not one.
     #[error("unknown function `{name}` in the expression `{text}` (the functions are sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, exp, log, ln, log10, sqrt, abs, min, max, atan2)")]
     UnknownFunction { text: String, name: String },
@@ -151,7 +157,10 @@ impl Expression {
         let mut allowed = [false; VARIABLES.len()];
         allowed[..SPACE_TIME].fill(true);
         for name in extra {
-            let k = VARIABLES.iter().position(|v| v == name).expect("a variable of VARIABLES");
+            let k = VARIABLES
+                .iter()
+                .position(|v| v == name)
+                .expect("a variable of VARIABLES");
             allowed[k] = true;
         }
         let node = Parser::new(text, allowed)?.parse()?;
@@ -236,7 +245,10 @@ impl Expression {
 
     /// Whether `variable` (one of x, y, z, t, r, theta) occurs.
     pub fn uses(&self, variable: &str) -> bool {
-        VARIABLES.iter().position(|v| *v == variable).is_some_and(|k| self.uses[k])
+        VARIABLES
+            .iter()
+            .position(|v| *v == variable)
+            .is_some_and(|k| self.uses[k])
     }
 
     /// Whether any of x, y, z occurs.
@@ -789,13 +801,22 @@ mod tests {
                 let fd = (f.eval_with([0.3, 0.0, 0.0], 0.7, at(v + h)) - f.eval_with([0.3, 0.0, 0.0], 0.7, at(v - h)))
                     / (2.0 * h);
                 let exact = df.eval_with([0.3, 0.0, 0.0], 0.7, at(v));
-                assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{text} at {v}: {exact} vs {fd}");
+                assert!(
+                    (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
+                    "{text} at {v}: {exact} vs {fd}"
+                );
             }
         }
         // Constant in r: derivative 0; abs has no symbolic derivative in exmex.
         let g = Expression::parse_with("x + t", &["r"]).unwrap();
-        assert_eq!(g.derivative("r").unwrap().eval_with([1.0, 0.0, 0.0], 1.0, [0.5, 0.0]), 0.0);
-        assert!(Expression::parse_with("abs(r - 1)", &["r"]).unwrap().derivative("r").is_none());
+        assert_eq!(
+            g.derivative("r").unwrap().eval_with([1.0, 0.0, 0.0], 1.0, [0.5, 0.0]),
+            0.0
+        );
+        assert!(Expression::parse_with("abs(r - 1)", &["r"])
+            .unwrap()
+            .derivative("r")
+            .is_none());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 use serde::Serialize;
 
+use super::laws::ContactLaws;
 use super::problem::Problem;
 use super::state::State;
 use crate::la::vector::norm2;
@@ -72,25 +73,20 @@ fn combine(tangents: &[[f64; 3]], coordinates: &[f64]) -> [f64; 3] {
     v
 }
 
-/// The friction bounds b(|w_i|) at the contact nodes, for w_τ node-major in tangent
-/// coordinates (d − 1 per node): the bounds a convexification iterate freezes.
-pub fn friction_bounds(problem: &Problem, w: &[f64]) -> Vec<f64> {
-    let td = problem.dim() - 1;
-    (0..problem.contact.len())
-        .map(|i| problem.friction.bound(norm2(&w[i * td..(i + 1) * td])))
-        .collect()
-}
-
 /// The contact rows of a state; a node slips when |w_τ| exceeds `slip_tolerance`.
+///
+/// The bound is the law's at the state's time and slip distance.
 pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Vec<ContactRow> {
     let tangential = problem.dim() - 1;
+    let laws = ContactLaws::of_state(problem, state);
     let w_tau = contact_tangential(problem, &state.w);
     problem
         .contact
         .iter()
         .zip(w_tau.chunks_exact(tangential))
         .zip(state.xi.chunks_exact(tangential))
-        .map(|((node, w), xi)| {
+        .enumerate()
+        .map(|(i, ((node, w), xi))| {
             let speed = norm2(w);
             ContactRow {
                 node: node.node,
@@ -99,7 +95,7 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
                 tangents: node.tangents.clone(),
                 w_tau: w.to_vec(),
                 xi: xi.to_vec(),
-                bound: problem.friction.bound(speed),
+                bound: laws.as_ref().map_or(f64::NAN, |laws| laws.bound(i, speed)),
                 slip: speed > slip_tolerance,
                 theta: state.theta[node.node],
             }

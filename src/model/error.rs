@@ -45,6 +45,22 @@ pub enum ModelError {
     /// A symmetry part that is not flat.
     #[error("the symmetry part `{part}` is not flat (a symmetry plane needs one normal)")]
     CurvedSymmetryPart { part: String },
+    /// A friction law given for a part that is not a contact part.
+    #[error(
+        "a friction law is given for `{part}` (friction.part), which is not a contact part (those are {contact:?})"
+    )]
+    FrictionOffContact { part: String, contact: Vec<String> },
+    /// Per-part friction laws that leave a contact part without one.
+    #[error("the contact part `{part}` has no friction law: give it one (a [[friction]] table with part = \"{part}\") or add a table without `part` for the rest")]
+    NoFrictionLaw { part: String },
+    /// A friction scale with more than one component.
+    #[error("the friction bound S must be a scalar datum, but it has {found} components")]
+    FrictionScaleComponents { found: usize },
+    /// A friction scale that is negative or not finite at a contact node.
+    #[error(
+        "the friction bound S is {value} at x = {x:?}, t = {t} (expected a finite, non-negative value: friction.bound)"
+    )]
+    BadFrictionScale { value: f64, x: [f64; 3], t: f64 },
     /// A mesh that is not valid.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),

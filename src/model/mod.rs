@@ -7,19 +7,22 @@
 //! - [`State`]: the fields carried from time level to time level;
 //! - [`StepMatrix`] and [`StepRhs`]: the linear part of one step of Problem 14;
 //! - [`norms`]: the norms of the stop criteria (77)–(80);
+//! - [`ContactLaws`]: the laws on Γ_C node by node at one step ([`Friction`], [`Heating`]);
 //! - [`ContactRow`]: the state at a node of Γ_C, as output reads it;
 //! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
 
 mod contact_rows;
 mod error;
+mod laws;
 pub mod norms;
 mod problem;
 pub mod samples;
 mod state;
 mod step_matrix;
 
-pub use contact_rows::{contact_rows, contact_tangential, friction_bounds, ContactRow};
+pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
+pub use laws::{ContactLaws, Friction, Heating};
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{

@@ -35,12 +35,19 @@ pub fn contact_l2(problem: &Problem, field: &[f64]) -> f64 {
         .sqrt()
 }
 
-/// ζ_i = −∂j(θ_i) at the contact nodes (the heat-exchange multiplier of Problem 14).
-pub fn heat_exchange_multiplier(problem: &Problem, theta: &[f64]) -> Vec<f64> {
+/// ζ_i = −∂j(θ_i) at the contact nodes at time t (the heat-exchange multiplier of Problem 14).
+pub fn heat_exchange_multiplier(problem: &Problem, t: f64, theta: &[f64]) -> Vec<f64> {
     problem
         .contact
         .iter()
-        .map(|node| -problem.exchange.derivative(theta[node.node]))
+        .map(|node| {
+            let at = crate::contact::LawPoint {
+                x: problem.mesh.coords[node.node],
+                t,
+                slip_distance: 0.0,
+            };
+            -problem.exchange.flux(&at, theta[node.node])
+        })
         .collect()
 }
 
@@ -60,8 +67,8 @@ pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64;
     let du = energy(m, &diff(&new.u, &old.u));
     let dtheta = gradient(m, &diff(&new.theta, &old.theta));
     let dxi = contact_l2(problem, &diff(&new.xi, &old.xi));
-    let zeta_new = heat_exchange_multiplier(problem, &new.theta);
-    let zeta_old = heat_exchange_multiplier(problem, &old.theta);
+    let zeta_new = heat_exchange_multiplier(problem, new.t, &new.theta);
+    let zeta_old = heat_exchange_multiplier(problem, old.t, &old.theta);
     let zeta_diff = diff(&zeta_new, &zeta_old);
     let zeta_ref = zeta_old;
     [

@@ -6,7 +6,7 @@
 //! directly:
 //!
 //! ```
-//! use thermocontact::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
+//! use thermocontact::contact::{LinearHeating, QuadraticExchange, VelocityWeakening};
 //! use thermocontact::loads::Datum;
 //! use thermocontact::material::{Isotropic, Material};
 //! use thermocontact::model::{LoadTarget, ProblemBuilder, TimeGrid};
@@ -25,7 +25,7 @@
 //!     .dirichlet(&["left"])
 //!     .neumann(&["top", "right"])
 //!     .contact(&["bottom"])
-//!     .friction(SlipWeakening { scale: 150.0, a: 1.0, b: 0.2, alpha: 100.0 })
+//!     .friction(150.0, VelocityWeakening { a: 1.0, b: 0.2, alpha: 100.0 })
 //!     .heat_exchange(QuadraticExchange { coefficient: 1.0, foundation_temperature: 0.0 })
 //!     .frictional_heating(LinearHeating::affine(0.0, 10.0))
 //!     .load(LoadTarget::Traction("top".into()), Datum::affine(vec![0.0, 0.0], vec![0.0, -800.0]))
@@ -35,8 +35,11 @@
 //! ```
 
 use super::error::ModelError as Error;
+use super::laws::{Friction, Heating};
 use crate::contact::frames::{contact_frames, orthogonal_complement};
-use crate::contact::{FrictionLaw, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange, Tresca};
+use crate::contact::{
+    FrictionLaw, FrictionalHeating, HeatExchange, LawPoint, LinearHeating, QuadraticExchange, Tresca,
+};
 use crate::fem::assembly::{self, Matrices};
 use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
 use crate::loads::{nodal_values, Datum, Load, LoadKind};
@@ -143,9 +146,14 @@ pub struct Problem {
     pub contact: Vec<ContactNode>,
     /// ℓ_p on every node of Γ_C (including clamped ones), zero elsewhere.
     pub contact_weights: Vec<f64>,
-    pub friction: Box<dyn FrictionLaw>,
+    /// The friction laws, each on its contact parts.
+    pub friction: Vec<Friction>,
+    /// The law of each contact node: an index into `friction`.
+    pub friction_of_node: Vec<usize>,
+    /// The heat exchange ∂j.
     pub exchange: Box<dyn HeatExchange>,
-    pub heating: Box<dyn FrictionalHeating>,
+    /// h_τ and its share.
+    pub heating: Heating,
     /// Loads on the velocity equation: F(t) = Σ ∫ f·φ.
     forces: Vec<Load>,
     /// Loads on the temperature equation: ∫ g η.
@@ -180,7 +188,7 @@ pub trait ExtraLoads: Send + Sync + std::fmt::Debug {
 
 /// Builds a [`Problem`] from typed parts. Boundary parts are named as in the mesh; defaults: no
 /// parts in any role, θ_D = 0, Tresca friction with bound 0, no heat exchange, no frictional
-/// heating, no loads, zero initial data.
+/// heating (share 1), no loads, zero initial data.
 pub struct ProblemBuilder {
     mesh: Mesh,
     material: Material,
@@ -190,9 +198,11 @@ pub struct ProblemBuilder {
     contact: Vec<String>,
     symmetry: Vec<String>,
     boundary_temperature: f64,
-    friction: Box<dyn FrictionLaw>,
-    exchange: QuadraticExchange,
+    /// (part name or `None` for all, scale, law).
+    friction: Vec<(Option<String>, Datum, Box<dyn FrictionLaw>)>,
+    exchange: Box<dyn HeatExchange>,
     heating: Box<dyn FrictionalHeating>,
+    heat_share: f64,
     loads: Vec<(LoadTarget, Datum, String)>,
     initial: [(Datum, &'static str); 3],
     /// Nodal initial fields that replace the three data above (a checkpoint of another run).
@@ -220,12 +230,13 @@ impl ProblemBuilder {
             contact: Vec::new(),
             symmetry: Vec::new(),
             boundary_temperature: 0.0,
-            friction: Box::new(Tresca { scale: 0.0 }),
-            exchange: QuadraticExchange {
+            friction: Vec::new(),
+            exchange: Box::new(QuadraticExchange {
                 coefficient: 0.0,
                 foundation_temperature: 0.0,
-            },
+            }),
             heating: Box::new(LinearHeating::affine(0.0, 0.0)),
+            heat_share: 1.0,
             loads: Vec::new(),
             initial: [
                 (Datum::Constant(vec![0.0; d]), INITIAL_NAMES[0]),
@@ -268,15 +279,54 @@ impl ProblemBuilder {
         self
     }
 
-    /// The friction law on Γ_C.
-    pub fn friction(mut self, law: impl FrictionLaw + 'static) -> Self {
-        self.friction = Box::new(law);
+    /// The friction law on every contact part not given its own ([`ProblemBuilder::friction_on`]):
+    /// the bound S(x, t) μ(r), the scale S a datum (a number, affine in t, an expression).
+    pub fn friction(mut self, scale: impl Into<Datum>, law: impl FrictionLaw + 'static) -> Self {
+        self.friction.retain(|(part, _, _)| part.is_some());
+        self.friction.push((None, scale.into(), Box::new(law)));
         self
     }
 
-    /// The heat exchange with the foundation on Γ_C.
-    pub fn heat_exchange(mut self, law: QuadraticExchange) -> Self {
+    /// [`ProblemBuilder::friction`] (`part` `None`) or [`ProblemBuilder::friction_on`], the law
+    /// boxed.
+    pub fn friction_boxed(mut self, part: Option<&str>, scale: Datum, law: Box<dyn FrictionLaw>) -> Self {
+        if part.is_none() {
+            self.friction.retain(|(part, _, _)| part.is_some());
+        }
+        self.friction.push((part.map(String::from), scale, law));
+        self
+    }
+
+    /// [`ProblemBuilder::heat_exchange`], the law boxed.
+    pub fn heat_exchange_boxed(mut self, law: Box<dyn HeatExchange>) -> Self {
         self.exchange = law;
+        self
+    }
+
+    /// [`ProblemBuilder::frictional_heating`], the law boxed.
+    pub fn frictional_heating_boxed(mut self, law: Box<dyn FrictionalHeating>) -> Self {
+        self.heating = law;
+        self
+    }
+
+    /// The friction law on the contact part `part` (a node shared by two parts takes the law
+    /// given first).
+    pub fn friction_on(mut self, part: &str, scale: impl Into<Datum>, law: impl FrictionLaw + 'static) -> Self {
+        self.friction
+            .push((Some(part.to_string()), scale.into(), Box::new(law)));
+        self
+    }
+
+    /// The heat exchange with the foundation on Γ_C (linear: [`QuadraticExchange`]; or a table
+    /// or expression of θ, possibly nonmonotone).
+    pub fn heat_exchange(mut self, law: impl HeatExchange + 'static) -> Self {
+        self.exchange = Box::new(law);
+        self
+    }
+
+    /// The fraction of the frictional power that enters the body (default 1, as in the paper).
+    pub fn heat_share(mut self, share: f64) -> Self {
+        self.heat_share = share;
         self
     }
 
@@ -372,10 +422,10 @@ impl ProblemBuilder {
         let theta_fixed = mesh.nodes_on(&[parts.dirichlet.clone(), parts.neumann.clone()].concat());
         let temperature = TemperatureSpace::new(&theta_fixed);
 
-        let (k_e, theta_r) = self.exchange.robin();
+        let (k_e, theta_r) = self.exchange.robin().unwrap_or((0.0, 0.0));
         let matrices = assembly::assemble_matrices(&mesh, &material, &parts.contact, k_e);
         let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
-        let contact = frames
+        let contact: Vec<ContactNode> = frames
             .into_iter()
             .filter(|(p, frame)| !clamped[*p] && frame.n_free > 0)
             .map(|(p, frame)| ContactNode {
@@ -389,6 +439,8 @@ impl ProblemBuilder {
                 theta_dof: temperature.free[p],
             })
             .collect();
+
+        let (friction, friction_of_node) = friction_of_nodes(&mesh, &parts, self.friction, &contact)?;
 
         let mut forces = Vec::new();
         let mut heat_sources = Vec::new();
@@ -465,9 +517,13 @@ impl ProblemBuilder {
             matrices,
             contact,
             contact_weights,
-            friction: self.friction,
-            exchange: Box::new(self.exchange),
-            heating: self.heating,
+            friction,
+            friction_of_node,
+            exchange: self.exchange,
+            heating: Heating {
+                law: self.heating,
+                share: self.heat_share,
+            },
             forces,
             heat_sources,
             exchange_load,
@@ -513,9 +569,23 @@ impl Problem {
         Ok(force)
     }
 
-    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs.
-    pub fn heat_load(&self, t: f64) -> Result<Vec<f64>, Error> {
+    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs; for a nonlinear heat exchange,
+    /// −ℓ_p ∂j(θ_p) at the nodes of Γ_C evaluated at the temperatures `exchange_at` instead
+    /// (nodal quadrature, the friction's).
+    pub fn heat_load(&self, t: f64, exchange_at: &[f64]) -> Result<Vec<f64>, Error> {
         let mut heat = self.exchange_load.clone();
+        if self.exchange.robin().is_none() {
+            for (p, &weight) in self.contact_weights.iter().enumerate() {
+                if weight > 0.0 {
+                    let at = LawPoint {
+                        x: self.mesh.coords[p],
+                        t,
+                        slip_distance: 0.0,
+                    };
+                    heat[p] -= weight * self.exchange.flux(&at, exchange_at[p]);
+                }
+            }
+        }
         for load in &self.heat_sources {
             load.add_to(&self.mesh, t, &mut heat)?;
         }
@@ -523,6 +593,25 @@ impl Problem {
             extra.add_heat(self, t, &mut heat);
         }
         Ok(heat)
+    }
+
+    /// The friction bound b(r) at the point x and time t of the law for every part (the first
+    /// law given where each part has its own), slip distance 0: for uniform laws, what the
+    /// studies and figures scale by (the paper's μ(0)S = 150).
+    pub fn friction_bound(&self, x: [f64; 3], t: f64, r: f64) -> f64 {
+        let friction = self
+            .friction
+            .iter()
+            .find(|f| f.parts.is_empty())
+            .unwrap_or(&self.friction[0]);
+        let mut scale = [0.0];
+        friction.scale.eval(x, t, &mut scale);
+        let at = LawPoint {
+            x,
+            t,
+            slip_distance: 0.0,
+        };
+        friction.law.bound(scale[0], &at, r)
     }
 
     /// |Γ_C| by the nodal weights.
@@ -534,6 +623,82 @@ impl Problem {
     pub fn part_names(&self, parts: &[usize]) -> Vec<&str> {
         parts.iter().map(|&p| self.mesh.part_names[p].as_str()).collect()
     }
+}
+
+/// The friction laws with their parts, and the law of each contact node: the first law listed
+/// whose parts hold the node, else the law for all parts. A contact part no law covers is an
+/// error (a problem without any friction law gets Tresca with bound 0: frictionless).
+fn friction_of_nodes(
+    mesh: &Mesh,
+    parts: &BoundaryParts,
+    given: Vec<(Option<String>, Datum, Box<dyn FrictionLaw>)>,
+    contact: &[ContactNode],
+) -> Result<(Vec<Friction>, Vec<usize>), Error> {
+    let mut laws = Vec::new();
+    let mut catch_all = None;
+    for (part, scale, law) in given {
+        if scale.n_components() != 1 {
+            return Err(Error::FrictionScaleComponents {
+                found: scale.n_components(),
+            });
+        }
+        let parts_of_law = match part {
+            None => {
+                catch_all = Some(laws.len());
+                Vec::new()
+            }
+            Some(name) => {
+                let index = part_of(mesh, "friction", &name)?;
+                if !parts.contact.contains(&index) {
+                    return Err(Error::FrictionOffContact {
+                        part: name,
+                        contact: parts.contact.iter().map(|&p| mesh.part_names[p].clone()).collect(),
+                    });
+                }
+                vec![index]
+            }
+        };
+        laws.push(Friction {
+            scale,
+            law,
+            parts: parts_of_law,
+        });
+    }
+    if laws.is_empty() {
+        catch_all = Some(0);
+        laws.push(Friction {
+            scale: Datum::scalar(0.0),
+            law: Box::new(Tresca),
+            parts: Vec::new(),
+        });
+    }
+    let mut on_part: Vec<Option<usize>> = vec![None; mesh.part_names.len()];
+    for (k, law) in laws.iter().enumerate() {
+        for &p in &law.parts {
+            on_part[p].get_or_insert(k);
+        }
+    }
+    if catch_all.is_none() {
+        if let Some(&p) = parts.contact.iter().find(|&&p| on_part[p].is_none()) {
+            return Err(Error::NoFrictionLaw {
+                part: mesh.part_names[p].clone(),
+            });
+        }
+    }
+    // The parts of each node, from the facets of Γ_C.
+    let mut node_law: Vec<Option<usize>> = vec![None; mesh.n_nodes()];
+    for f in mesh.facets_of(&parts.contact) {
+        if let Some(k) = on_part[mesh.facet_parts[f]] {
+            for &p in mesh.facet(f) {
+                node_law[p] = Some(node_law[p].map_or(k, |j: usize| j.min(k)));
+            }
+        }
+    }
+    let of_node = contact
+        .iter()
+        .map(|node| node_law[node.node].or(catch_all).expect("every contact part has a law"))
+        .collect();
+    Ok((laws, of_node))
 }
 
 fn strings(names: &[&str]) -> Vec<String> {

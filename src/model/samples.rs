@@ -7,7 +7,7 @@
 
 use super::error::ModelError;
 use super::problem::{LoadTarget, Problem, ProblemBuilder, TimeGrid};
-use crate::contact::{LinearHeating, QuadraticExchange, SlipWeakening};
+use crate::contact::{LinearHeating, QuadraticExchange, VelocityWeakening};
 use crate::loads::Datum;
 use crate::material::{Isotropic, Material};
 use crate::mesh;
@@ -90,12 +90,14 @@ fn with_paper_data(builder: ProblemBuilder, d: usize) -> ProblemBuilder {
         .initial_displacement(Datum::constant(vec![0.0; d]), "initial.displacement")
         .initial_velocity(Datum::constant(vec![0.0; d]), "initial.velocity")
         .initial_temperature(Datum::scalar(25.0), "initial.temperature")
-        .friction(SlipWeakening {
-            scale: 150.0,
-            a: 1.0,
-            b: 0.2,
-            alpha: 100.0,
-        })
+        .friction(
+            150.0,
+            VelocityWeakening {
+                a: 1.0,
+                b: 0.2,
+                alpha: 100.0,
+            },
+        )
         .load(LoadTarget::BodyForce, Datum::affine(gravity, vec![0.0; d]))
         .load(LoadTarget::HeatSource, Datum::affine(vec![0.0], vec![0.0]))
 }

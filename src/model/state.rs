@@ -20,9 +20,28 @@ pub struct State {
     /// ξ_n: friction stress at the contact nodes in their tangent coordinates, node-major,
     /// d − 1 per node.
     pub xi: Vec<f64>,
+    /// s_n: the slip distance Σ_{m≤n} k ‖w_τ^m‖ at each contact node (the history variable of
+    /// slip-distance weakening).
+    pub slip_distance: Vec<f64>,
+    /// s_{n−1}: the slip distances the law of step n read (what its residual and bounds are
+    /// reported against); not checkpointed.
+    pub slip_distance_before: Vec<f64>,
 }
 
 impl State {
+    /// s_n from s_{n−1} and w_n over the step from `previous` (explicit: the step's law read
+    /// s_{n−1}).
+    pub fn accumulate_slip(&mut self, problem: &Problem, previous: &State) {
+        let k = self.t - previous.t;
+        let w_tau = super::contact_tangential(problem, &self.w);
+        let td = problem.dim() - 1;
+        self.slip_distance_before = previous.slip_distance.clone();
+        // An empty `previous.slip_distance` (a checkpoint older than it) reads as zeros.
+        self.slip_distance = (w_tau.chunks_exact(td).enumerate())
+            .map(|(i, w)| previous.slip_distance.get(i).copied().unwrap_or(0.0) + k * crate::la::vector::norm2(w))
+            .collect();
+    }
+
     /// The initial state (10): u₀, u₁ in E^h, θ₀ at the nodes, no friction stress.
     pub fn initial(problem: &Problem) -> Self {
         let initial = &problem.initial;
@@ -33,6 +52,8 @@ impl State {
             u: initial.displacement.clone(),
             theta: initial.temperature.clone(),
             xi: vec![0.0; problem.contact.len() * (problem.dim() - 1)],
+            slip_distance: vec![0.0; problem.contact.len()],
+            slip_distance_before: vec![0.0; problem.contact.len()],
         }
     }
 }

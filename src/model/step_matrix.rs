@@ -209,13 +209,20 @@ impl StepRhs {
     }
 
     /// The right-hand side of step n without the contact terms:
-    /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns.
-    pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
+    /// (ℳW_{n−1}/k − 𝒦_B U_{n−1} + F_n, ℳ_θΘ_{n−1}/k + G_n) seen by the unknowns; a nonlinear
+    /// heat exchange evaluated at `exchange_at` (default Θ_{n−1}).
+    pub fn rhs(
+        &self,
+        problem: &Problem,
+        previous: &State,
+        t: f64,
+        exchange_at: Option<&[f64]>,
+    ) -> Result<Vec<f64>, Error> {
         let mats = &problem.matrices;
         let mut mech = problem.force(t)?;
         mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
         mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
-        let mut heat = problem.heat_load(t)?;
+        let mut heat = problem.heat_load(t, exchange_at.unwrap_or(&previous.theta))?;
         mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
 
         let mut rhs = vec![0.0; self.n_unknowns()];
@@ -253,14 +260,18 @@ impl StepRhs {
             .zip(&problem.theta_dirichlet)
             .map(|(free, &fixed)| free.map_or(fixed, |r| x[self.n_w + r]))
             .collect();
-        State {
+        let mut state = State {
             n: previous.n + 1,
             t,
             w,
             u,
             theta,
             xi,
-        }
+            slip_distance: Vec::new(),
+            slip_distance_before: Vec::new(),
+        };
+        state.accumulate_slip(problem, previous);
+        state
     }
 }
 

@@ -12,7 +12,8 @@
 //! u64                  length of the header
 //! header               JSON: identity (scenario and mesh fingerprints), n, t, array lengths,
 //!                      and the run's record so far (opaque here, the driver's)
-//! f64 × (…)            w, u, θ, ξ, as the header's lengths say
+//! f64 × (…)            w, u, θ, ξ, s (the slip distances; absent in checkpoints written
+//!                      before them, read as zeros), as the header's lengths say
 //! [u8; 32]             SHA-256 of everything before it
 //! ```
 //!
@@ -55,7 +56,8 @@ struct Header {
     identity: Identity,
     n: usize,
     t: f64,
-    lengths: [usize; 4],
+    /// w, u, θ, ξ and s (four where s predates the format: s = 0).
+    lengths: Vec<usize>,
     record: serde_json::Value,
 }
 
@@ -123,7 +125,7 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> std::io::Result<()> {
         identity: checkpoint.identity.clone(),
         n: s.n,
         t: s.t,
-        lengths: [s.w.len(), s.u.len(), s.theta.len(), s.xi.len()],
+        lengths: vec![s.w.len(), s.u.len(), s.theta.len(), s.xi.len(), s.slip_distance.len()],
         record: checkpoint.record.clone(),
     };
     let header = serde_json::to_vec(&header).map_err(std::io::Error::other)?;
@@ -135,7 +137,7 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> std::io::Result<()> {
         hashed.write_all(MAGIC)?;
         hashed.write_all(&(header.len() as u64).to_le_bytes())?;
         hashed.write_all(&header)?;
-        for array in [&s.w, &s.u, &s.theta, &s.xi] {
+        for array in [&s.w, &s.u, &s.theta, &s.xi, &s.slip_distance] {
             let mut bytes = Vec::with_capacity(8 * array.len());
             for v in array.iter() {
                 bytes.extend_from_slice(&v.to_le_bytes());
@@ -189,8 +191,12 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         .ok_or_else(|| damaged("its header is longer than the file"))?;
     let header: Header = serde_json::from_slice(header_bytes).map_err(|_| damaged("its header is not valid"))?;
     at += header_len;
-    let total: usize = header.lengths.iter().sum();
-    if body.len() - at != 8 * total {
+    if !(4..=5).contains(&header.lengths.len()) {
+        return Err(damaged("its header does not list four or five arrays"));
+    }
+    // Checked: a damaged header's lengths may overflow.
+    let total = (header.lengths.iter()).try_fold(0usize, |sum, &len| sum.checked_add(len.checked_mul(8)?));
+    if total != Some(body.len() - at) {
         return Err(damaged("its arrays do not have the lengths its header gives"));
     }
     let mut arrays = header.lengths.iter().map(|&len| {
@@ -201,7 +207,7 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         at += 8 * len;
         values
     });
-    let mut next = || arrays.next().expect("four arrays");
+    let mut next = || arrays.next().unwrap_or_default();
     let state = State {
         n: header.n,
         t: header.t,
@@ -209,7 +215,11 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         u: next(),
         theta: next(),
         xi: next(),
+        slip_distance: next(),
+        slip_distance_before: Vec::new(),
     };
+    // Four arrays (a checkpoint older than the slip distances): `slip_distance` stays empty,
+    // which the laws and the next step read as zeros.
     Ok(Checkpoint {
         identity: header.identity,
         state,
@@ -237,7 +247,8 @@ impl Checkpoint {
         }
         let s = &self.state;
         let sizes = |s: &State| [s.w.len(), s.u.len(), s.theta.len(), s.xi.len()];
-        if sizes(s) != sizes(like) {
+        let slip_sizes_agree = s.slip_distance.is_empty() || s.slip_distance.len() == like.slip_distance.len();
+        if sizes(s) != sizes(like) || !slip_sizes_agree {
             return Err(CheckpointError::Damaged {
                 path: path.to_path_buf(),
                 reason: "its fields do not have the sizes of this problem's",
@@ -266,6 +277,8 @@ mod tests {
             u: vec![0.1, 0.2, 0.3, 0.4],
             theta: vec![25.0, 24.999999999999996],
             xi: vec![-149.99999999999997],
+            slip_distance: vec![0.125],
+            slip_distance_before: Vec::new(),
         }
     }
 
@@ -288,7 +301,13 @@ mod tests {
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let (a, b) = (&checkpoint.state, &back.state);
         assert_eq!((a.n, a.t.to_bits()), (b.n, b.t.to_bits()));
-        for (x, y) in [(&a.w, &b.w), (&a.u, &b.u), (&a.theta, &b.theta), (&a.xi, &b.xi)] {
+        for (x, y) in [
+            (&a.w, &b.w),
+            (&a.u, &b.u),
+            (&a.theta, &b.theta),
+            (&a.xi, &b.xi),
+            (&a.slip_distance, &b.slip_distance),
+        ] {
             assert_eq!(bits(x), bits(y));
         }
         assert_eq!(back.record, checkpoint.record);

@@ -7,8 +7,12 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::validate::{invalid, MAX_MAGNITUDE};
-use super::{Affine, DatumSpec, FrictionSpec, Scenario, Traction};
-use crate::contact::{LinearHeating, QuadraticExchange, SlipWeakening, Tresca};
+use super::{Affine, DatumSpec, FrictionSpec, HeatExchangeSpec, Scenario, Traction};
+use crate::contact::{
+    ExpressionExchange, ExpressionFriction, ExpressionHeating, FrictionLaw, FrictionalHeating, HeatExchange,
+    LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction, Tresca,
+    VelocityWeakening,
+};
 use crate::driver::{OutputPlan, Summary};
 use crate::error::Error;
 use crate::loads::{Datum, Expression};
@@ -16,6 +20,160 @@ use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
 use crate::model::{InitialFields, LoadTarget, ModelError, Problem, ProblemBuilder, State, TimeGrid};
 use crate::step::{KrylovParams, SolverParams};
+
+impl Scenario {
+    /// Each friction law with the key that names it in errors (`friction`, or `friction[k]`
+    /// for one table per part).
+    pub(super) fn friction_keys(&self) -> Vec<(String, &FrictionSpec)> {
+        match &self.friction {
+            super::FrictionSpecs::One(law) => vec![("friction".to_string(), law)],
+            super::FrictionSpecs::Parts(laws) => (laws.iter().enumerate())
+                .map(|(k, law)| (format!("friction[{k}]"), law))
+                .collect(),
+        }
+    }
+
+    /// h_τ: λ(t) r, or the expression `frictional_heating.value`.
+    pub(super) fn frictional_heating(&self) -> Result<Box<dyn FrictionalHeating>, Error> {
+        let h = &self.frictional_heating;
+        Ok(match &h.value {
+            None => Box::new(LinearHeating::affine(h.constant, h.rate)),
+            Some(text) => Box::new(ExpressionHeating::parse(text).map_err(|e| {
+                invalid(
+                    "frictional_heating.value",
+                    text,
+                    &format!("an expression of r, x, y, z, t: {e}"),
+                )
+            })?),
+        })
+    }
+}
+
+/// The scale and the law of one friction table; errors name `key`.
+pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Datum, Box<dyn FrictionLaw>), Error> {
+    let scale = spec.bound().to_datum(&format!("{key}.bound"), 1)?;
+    if let Datum::Constant(values) = &scale {
+        if values[0] < 0.0 {
+            return Err(invalid(&format!("{key}.bound"), &values[0], "a non-negative bound S"));
+        }
+    }
+    let table_error = |column: &str, e: crate::contact::TableError| {
+        invalid(&format!("{key}.{column}"), &e.to_string(), "a valid table")
+    };
+    let law: Box<dyn FrictionLaw> = match spec {
+        FrictionSpec::VelocityWeakening { a, b, alpha, .. } | FrictionSpec::SlipWeakening { a, b, alpha, .. } => {
+            Box::new(VelocityWeakening {
+                a: *a,
+                b: *b,
+                alpha: *alpha,
+            })
+        }
+        FrictionSpec::Tresca { .. } => Box::new(Tresca),
+        FrictionSpec::Table {
+            slip_rate,
+            coefficient,
+            file,
+            ..
+        } => {
+            let (rates, mu) = match file {
+                None => (slip_rate.clone(), coefficient.clone()),
+                Some(path) => {
+                    if !slip_rate.is_empty() || !coefficient.is_empty() {
+                        return Err(invalid(
+                            &format!("{key}.file"),
+                            path,
+                            "either a file or slip_rate and coefficient arrays, not both",
+                        ));
+                    }
+                    read_table_csv(path).map_err(|reason| invalid(&format!("{key}.file"), path, &reason))?
+                }
+            };
+            let table = crate::contact::Table::new(rates, mu, ["slip_rate", "coefficient"])
+                .and_then(|t| t.non_negative("coefficient"))
+                .map_err(|e| table_error("coefficient", e))?;
+            Box::new(TabulatedFriction { table })
+        }
+        FrictionSpec::Expression { coefficient, .. } => {
+            Box::new(ExpressionFriction::parse(coefficient).map_err(|e| {
+                invalid(
+                    &format!("{key}.coefficient"),
+                    coefficient,
+                    &format!("an expression of r, x, y, z, t: {e}"),
+                )
+            })?)
+        }
+        FrictionSpec::SlipDistanceWeakening {
+            static_coefficient,
+            dynamic,
+            distance,
+            ..
+        } => Box::new(SlipDistanceWeakening {
+            static_coefficient: *static_coefficient,
+            dynamic_coefficient: *dynamic,
+            distance: *distance,
+        }),
+    };
+    Ok((scale, law))
+}
+
+/// The heat exchange of the scenario.
+pub(super) fn heat_exchange(spec: &HeatExchangeSpec) -> Result<Box<dyn HeatExchange>, Error> {
+    Ok(match spec {
+        HeatExchangeSpec::Linear {
+            coefficient,
+            foundation_temperature,
+        } => Box::new(QuadraticExchange {
+            coefficient: *coefficient,
+            foundation_temperature: *foundation_temperature,
+        }),
+        HeatExchangeSpec::Table { temperature, flux } => Box::new(TabulatedExchange {
+            table: crate::contact::Table::new(temperature.clone(), flux.clone(), ["temperature", "flux"]).map_err(
+                |e| {
+                    invalid(
+                        "heat_exchange",
+                        &e.to_string(),
+                        "a valid table of flux against temperature",
+                    )
+                },
+            )?,
+        }),
+        HeatExchangeSpec::Expression { flux } => Box::new(ExpressionExchange::parse(flux).map_err(|e| {
+            invalid(
+                "heat_exchange.flux",
+                flux,
+                &format!("an expression of theta, x, y, z, t: {e}"),
+            )
+        })?),
+    })
+}
+
+/// The two columns of a CSV file (slip rate, coefficient), one row per line; a first line that
+/// is not numbers is a header; `#` starts a comment.
+fn read_table_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("a readable CSV file ({e})"))?;
+    if !meta.is_file() || meta.len() > 16 << 20 {
+        return Err("a regular CSV file of at most 16 MiB".to_string());
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| format!("a readable CSV file ({e})"))?;
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for (number, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split([',', ';', '\t']).map(str::trim).collect();
+        let values: Option<Vec<f64>> = fields.iter().map(|f| f.parse().ok()).collect();
+        match values {
+            Some(v) if v.len() == 2 => {
+                x.push(v[0]);
+                y.push(v[1]);
+            }
+            None if x.is_empty() && number == 0 => continue,
+            _ => return Err(format!("two numbers per line (line {} reads `{line}`)", number + 1)),
+        }
+    }
+    Ok((x, y))
+}
 
 impl DatumSpec {
     /// The datum of the core, with `n` components, its expressions compiled; errors name `key`.
@@ -194,14 +352,9 @@ impl Scenario {
         .contact(&names(&b.contact))
         .symmetry(&names(&b.symmetry))
         .boundary_temperature(b.temperature)
-        .heat_exchange(QuadraticExchange {
-            coefficient: h.coefficient,
-            foundation_temperature: h.foundation_temperature,
-        })
-        .frictional_heating(LinearHeating::affine(
-            self.frictional_heating.constant,
-            self.frictional_heating.rate,
-        ))
+        .heat_exchange_boxed(heat_exchange(h)?)
+        .frictional_heating_boxed(self.frictional_heating()?)
+        .heat_share(self.frictional_heating.share)
         .initial_displacement(
             self.initial.displacement.to_datum("initial.displacement", d)?,
             "initial.displacement",
@@ -217,15 +370,13 @@ impl Scenario {
         if let Some(fields) = initial {
             builder = builder.initial_fields(fields, "initial.from");
         }
-        builder = match self.friction {
-            FrictionSpec::SlipWeakening { bound, a, b, alpha } => builder.friction(SlipWeakening {
-                scale: bound,
-                a,
-                b,
-                alpha,
-            }),
-            FrictionSpec::Tresca { bound } => builder.friction(Tresca { scale: bound }),
-        };
+        for (key, spec) in self.friction_keys() {
+            let (scale, law) = friction_law(&key, spec)?;
+            builder = match spec.part() {
+                None => builder.friction_boxed(None, scale, law),
+                Some(part) => builder.friction_boxed(Some(part), scale, law),
+            };
+        }
         let loads = &self.loads;
         builder = builder
             .labelled_load(

@@ -9,7 +9,7 @@ use toml::{Table, Value};
 
 use super::schema::LoadedMesh;
 use super::validate::invalid;
-use super::Scenario;
+use super::{FrictionSpec, Scenario};
 use crate::error::Error;
 use crate::mesh::{self, Mesh};
 
@@ -108,6 +108,7 @@ impl Scenario {
         overlay(&mut table, assigned, "")?;
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
+        scenario.rename_deprecated();
         if let Some(mesh) = given {
             scenario.loaded = LoadedMesh(Some(mesh));
         }
@@ -123,6 +124,35 @@ impl Scenario {
         Ok(scenario)
     }
 
+    /// Renames `law = "slip-weakening"` (the former name of the paper's velocity-weakening law)
+    /// and records a warning.
+    fn rename_deprecated(&mut self) {
+        for law in self.friction.laws_mut() {
+            if let FrictionSpec::SlipWeakening {
+                part,
+                bound,
+                a,
+                b,
+                alpha,
+            } = law
+            {
+                *law = FrictionSpec::VelocityWeakening {
+                    part: part.take(),
+                    bound: bound.clone(),
+                    a: *a,
+                    b: *b,
+                    alpha: *alpha,
+                };
+                self.warnings.push(
+                    "friction.law = \"slip-weakening\" is deprecated: the paper's law weakens with slip rate, so it is \
+                     named \"velocity-weakening\" (slip weakening means weakening with slip distance: \
+                     \"slip-distance-weakening\")"
+                        .to_string(),
+                );
+            }
+        }
+    }
+
     /// The scenario as TOML (what a run saves beside its results).
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("a scenario serializes")
@@ -134,6 +164,27 @@ fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
     let Some(folder) = folder else {
         return;
     };
+    // A friction table's `file` (one table or one per contact part).
+    let absolute = |file: &mut String| {
+        if Path::new(file.as_str()).is_relative() {
+            *file = folder.join(&*file).to_string_lossy().into_owned();
+        }
+    };
+    match user.get_mut("friction") {
+        Some(Value::Table(t)) => {
+            if let Some(Value::String(file)) = t.get_mut("file") {
+                absolute(file);
+            }
+        }
+        Some(Value::Array(laws)) => {
+            for law in laws {
+                if let Some(Value::String(file)) = law.as_table_mut().and_then(|t| t.get_mut("file")) {
+                    absolute(file);
+                }
+            }
+        }
+        _ => {}
+    }
     for (table, key) in [("mesh", "file"), ("initial", "from")] {
         if let Some(Value::Table(t)) = user.get_mut(table) {
             if let Some(Value::String(file)) = t.get_mut(key) {
@@ -209,11 +260,14 @@ const OPTIONAL_KEYS: &[&str] = &[
     "boundary.symmetry",
     "loads.pressure",
     "initial.from",
+    "friction.part",
+    "frictional_heating.value",
 ];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
 /// any of these forms ([`DatumSpec`] checks the new value).
 const DATUM_KEYS: &[&str] = &[
+    "friction.bound",
     "loads.body_force",
     "loads.heat_source",
     "initial.displacement",
@@ -272,6 +326,11 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
             });
         };
         if DATUM_KEYS.contains(&path.as_str()) {
+            *slot = value;
+            continue;
+        }
+        // One law per contact part ([[friction]]) replaces the single table, and back.
+        if path == "friction" && (slot.is_array() || value.is_array()) {
             *slot = value;
             continue;
         }
@@ -444,10 +503,15 @@ mod tests {
         let s = Scenario::load(Some("[mesh]\nnx = 8\n[time]\nfinal_time = 2"), &["mesh.ny=2".into()]).unwrap();
         assert_eq!((s.mesh.nx, s.mesh.ny), (Some(8), Some(2)));
         assert_eq!(s.time.final_time, 2.0);
+        let number =
+            |v: f64| crate::scenario::DatumSpec::Scalar(Box::new(crate::scenario::DatumSpec::Numbers(vec![v])));
+        let one = crate::scenario::FrictionSpecs::One;
         let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
-        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 3.0 });
+        let tresca = |bound| FrictionSpec::Tresca { part: None, bound };
+        assert_eq!(t.friction, one(tresca(number(3.0))));
         let t = Scenario::load(None, &["friction.law=tresca".into(), "friction.bound=100".into()]).unwrap();
-        assert_eq!(t.friction, FrictionSpec::Tresca { bound: 100.0 });
+        assert_eq!(t.friction, one(tresca(number(100.0))));
+        assert!(t.warnings.is_empty());
         let back = Scenario::load(
             None,
             &[
@@ -458,15 +522,18 @@ mod tests {
             ],
         )
         .unwrap();
+        // The deprecated name is read as the new one, with a warning.
         assert_eq!(
             back.friction,
-            FrictionSpec::SlipWeakening {
-                bound: 150.0,
+            one(FrictionSpec::VelocityWeakening {
+                part: None,
+                bound: number(150.0),
                 a: 1.0,
                 b: 0.2,
                 alpha: 50.0
-            }
+            })
         );
+        assert!(back.warnings[0].contains("velocity-weakening"), "{:?}", back.warnings);
         let p = Scenario::load(None, &["solver.kind=paper".into()]).unwrap();
         assert_eq!(p.solver.kind, SolverKind::Paper);
     }

@@ -26,8 +26,9 @@ mod validate;
 
 pub use load::{DEFAULT_TOML, MAX_SCENARIO_BYTES};
 pub use schema::{
-    Affine, BoundarySpec, DatumSpec, FrictionSpec, Geometry, HeatExchangeSpec, InitialSpec, Loads, MaterialSpec,
-    MeshSpec, OutputSpec, Pressure, Scenario, SolverSpec, Structured, TimeSpec, Traction,
+    Affine, BoundarySpec, DatumSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry, HeatExchangeSpec,
+    InitialSpec, Loads, MaterialSpec, MeshSpec, OutputSpec, Pressure, Scenario, SolverSpec, Structured, TimeSpec,
+    Traction,
 };
 pub use validate::{
     keys_behind, LENGTH_RANGE, MAX_CELL_ASPECT, MAX_CUTBACK_DEPTH, MAX_MAGNITUDE, MAX_OUTPUT_TIMES, MAX_STEPS,
@@ -44,12 +45,13 @@ mod tests {
         assert_eq!(s.material.density, 100.0);
         assert_eq!(
             s.friction,
-            FrictionSpec::SlipWeakening {
-                bound: 150.0,
+            FrictionSpecs::One(FrictionSpec::VelocityWeakening {
+                part: None,
+                bound: DatumSpec::Scalar(Box::new(DatumSpec::Numbers(vec![150.0]))),
                 a: 1.0,
                 b: 0.2,
                 alpha: 100.0
-            }
+            })
         );
         assert_eq!(s.loads.traction[0].rate, Some(vec![0.0, -800.0]));
         assert_eq!(s.output_steps(), vec![16, 32, 48, 64]);

@@ -24,14 +24,18 @@ pub struct Scenario {
     pub material: MaterialSpec,
     pub initial: InitialSpec,
     pub loads: Loads,
-    pub friction: FrictionSpec,
+    pub friction: FrictionSpecs,
     pub heat_exchange: HeatExchangeSpec,
-    pub frictional_heating: Affine<f64>,
+    pub frictional_heating: FrictionalHeatingSpec,
     pub solver: SolverSpec,
     pub output: OutputSpec,
     /// The mesh read from `mesh.file`, kept from validation to the build.
     #[serde(skip)]
     pub(super) loaded: LoadedMesh,
+    /// What the scenario asked for that works but should change (a deprecated name), said once
+    /// at the start of a run.
+    #[serde(skip)]
+    pub warnings: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -297,21 +301,163 @@ pub struct Loads {
     pub pressure: Vec<Pressure>,
 }
 
-/// The friction law on Γ_C.
+/// The friction laws on Γ_C: one table for every contact part (`[friction]`), or one per part
+/// (`[[friction]]`, each with `part`; one without `part` covers the rest).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum FrictionSpecs {
+    One(FrictionSpec),
+    Parts(Vec<FrictionSpec>),
+}
+
+impl<'de> Deserialize<'de> for FrictionSpecs {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error as _;
+        match Value::deserialize(deserializer)? {
+            Value::Array(items) => {
+                let laws = (items.into_iter().enumerate())
+                    .map(|(k, item)| {
+                        FrictionSpec::deserialize(item)
+                            .map_err(|e| D::Error::custom(format!("[[friction]] number {}: {e}", k + 1)))
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(FrictionSpecs::Parts(laws))
+            }
+            value => FrictionSpec::deserialize(value)
+                .map(FrictionSpecs::One)
+                .map_err(D::Error::custom),
+        }
+    }
+}
+
+impl FrictionSpecs {
+    /// The laws, in the order given.
+    pub fn laws(&self) -> &[FrictionSpec] {
+        match self {
+            FrictionSpecs::One(law) => std::slice::from_ref(law),
+            FrictionSpecs::Parts(laws) => laws,
+        }
+    }
+
+    /// The laws, mutable.
+    pub fn laws_mut(&mut self) -> &mut [FrictionSpec] {
+        match self {
+            FrictionSpecs::One(law) => std::slice::from_mut(law),
+            FrictionSpecs::Parts(laws) => laws,
+        }
+    }
+}
+
+/// A friction law on Γ_C: the bound S(x, t) μ(r) at slip rate r.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "law", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum FrictionSpec {
-    /// μ(r) = (a − b) e^(−αr) + b, bound μ(r) S (eq. (81)–(83)).
-    SlipWeakening { bound: f64, a: f64, b: f64, alpha: f64 },
-    /// Constant bound S.
-    Tresca { bound: f64 },
+    /// The paper's law (81)–(83): μ(r) = (a − b) e^(−αr) + b.
+    VelocityWeakening {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+        a: f64,
+        b: f64,
+        alpha: f64,
+    },
+    /// The former name of `velocity-weakening`, accepted with a warning.
+    SlipWeakening {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+        a: f64,
+        b: f64,
+        alpha: f64,
+    },
+    /// μ ≡ 1: the bound S.
+    Tresca {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+    },
+    /// μ at slip rates, piecewise linear (inline, or the two columns of a CSV file).
+    Table {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        slip_rate: Vec<f64>,
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        coefficient: Vec<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        file: Option<PathBuf>,
+    },
+    /// μ as an expression of r, x, y, z, t.
+    Expression {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+        coefficient: String,
+    },
+    /// μ = μ_s − (μ_s − μ_d) min(s/D_c, 1) of the slip distance s.
+    SlipDistanceWeakening {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        bound: DatumSpec,
+        #[serde(rename = "static")]
+        static_coefficient: f64,
+        dynamic: f64,
+        distance: f64,
+    },
 }
 
+impl FrictionSpec {
+    /// The contact part the law is given for (`None`: every part not given its own).
+    pub fn part(&self) -> Option<&str> {
+        match self {
+            FrictionSpec::VelocityWeakening { part, .. }
+            | FrictionSpec::SlipWeakening { part, .. }
+            | FrictionSpec::Tresca { part, .. }
+            | FrictionSpec::Table { part, .. }
+            | FrictionSpec::Expression { part, .. }
+            | FrictionSpec::SlipDistanceWeakening { part, .. } => part.as_deref(),
+        }
+    }
+
+    /// The scale S.
+    pub fn bound(&self) -> &DatumSpec {
+        match self {
+            FrictionSpec::VelocityWeakening { bound, .. }
+            | FrictionSpec::SlipWeakening { bound, .. }
+            | FrictionSpec::Tresca { bound, .. }
+            | FrictionSpec::Table { bound, .. }
+            | FrictionSpec::Expression { bound, .. }
+            | FrictionSpec::SlipDistanceWeakening { bound, .. } => bound,
+        }
+    }
+}
+
+/// The heat exchange with the foundation, ∂j(θ) on Γ_C.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "law", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum HeatExchangeSpec {
+    /// k_e (θ − θ_R): the paper's.
+    Linear {
+        coefficient: f64,
+        foundation_temperature: f64,
+    },
+    /// The flux at temperatures, piecewise linear.
+    Table { temperature: Vec<f64>, flux: Vec<f64> },
+    /// The flux as an expression of theta, x, y, z, t.
+    Expression { flux: String },
+}
+
+/// h_τ = λ(t) r with λ = constant + rate·t, or `value`, an expression of r, x, y, z, t; and
+/// the share of it that enters the body.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct HeatExchangeSpec {
-    pub coefficient: f64,
-    pub foundation_temperature: f64,
+pub struct FrictionalHeatingSpec {
+    pub constant: f64,
+    pub rate: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<String>,
+    pub share: f64,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

@@ -2,7 +2,7 @@
 //! dotted key, the value and what was expected; the memory estimate of the mesh
 //! ([`Error::TooLarge`]); and [`keys_behind`], the keys behind a failed step matrix.
 
-use super::{FrictionSpec, Scenario};
+use super::{FrictionSpec, HeatExchangeSpec, Scenario};
 use crate::error::Error;
 use crate::mesh;
 use crate::step::{LinearKind, PreconditionerKind};
@@ -140,27 +140,64 @@ impl Scenario {
         Ok(())
     }
 
-    /// The friction law, the heat exchange and the frictional heating.
+    /// The friction laws, the heat exchange and the frictional heating: each built once (the
+    /// build's own constructors), so a table, a file or an expression that would fail the run
+    /// fails here, naming its key.
     fn validate_laws(&self) -> Result<(), Error> {
-        match self.friction {
-            FrictionSpec::SlipWeakening { bound, a, b, alpha } => {
-                non_negative("friction.bound", bound)?;
-                positive("friction.b", b)?;
-                finite("friction.a", a)?;
-                if a < b {
-                    return Err(invalid("friction.a", &a, &format!("a ≥ b = {b} (μ decreasing)")));
+        for (key, spec) in self.friction_keys() {
+            let at = |name: &str| format!("{key}.{name}");
+            match spec {
+                FrictionSpec::VelocityWeakening { a, b, alpha, .. }
+                | FrictionSpec::SlipWeakening { a, b, alpha, .. } => {
+                    positive(&at("b"), *b)?;
+                    finite(&at("a"), *a)?;
+                    if a < b {
+                        return Err(invalid(&at("a"), a, &format!("a ≥ b = {b} (μ decreasing)")));
+                    }
+                    non_negative(&at("alpha"), *alpha)?;
                 }
-                non_negative("friction.alpha", alpha)?;
+                FrictionSpec::SlipDistanceWeakening {
+                    static_coefficient,
+                    dynamic,
+                    distance,
+                    ..
+                } => {
+                    non_negative(&at("static"), *static_coefficient)?;
+                    non_negative(&at("dynamic"), *dynamic)?;
+                    positive(&at("distance"), *distance)?;
+                }
+                FrictionSpec::Tresca { .. } | FrictionSpec::Table { .. } | FrictionSpec::Expression { .. } => {}
             }
-            FrictionSpec::Tresca { bound } => non_negative("friction.bound", bound)?,
+            if let (super::FrictionSpecs::Parts(_), None) = (&self.friction, spec.part()) {
+                let others = self.friction.laws().iter().filter(|l| l.part().is_none()).count();
+                if others > 1 {
+                    return Err(invalid(
+                        &at("part"),
+                        &"(none)",
+                        "a part for every [[friction]] table but one",
+                    ));
+                }
+            }
+            super::build::friction_law(&key, spec)?;
         }
-        non_negative("heat_exchange.coefficient", self.heat_exchange.coefficient)?;
-        finite(
-            "heat_exchange.foundation_temperature",
-            self.heat_exchange.foundation_temperature,
-        )?;
+        match &self.heat_exchange {
+            HeatExchangeSpec::Linear {
+                coefficient,
+                foundation_temperature,
+            } => {
+                non_negative("heat_exchange.coefficient", *coefficient)?;
+                finite("heat_exchange.foundation_temperature", *foundation_temperature)?;
+            }
+            HeatExchangeSpec::Table { .. } | HeatExchangeSpec::Expression { .. } => {}
+        }
+        super::build::heat_exchange(&self.heat_exchange)?;
         finite("frictional_heating.constant", self.frictional_heating.constant)?;
         finite("frictional_heating.rate", self.frictional_heating.rate)?;
+        let share = self.frictional_heating.share;
+        if !(0.0..=1.0).contains(&share) {
+            return Err(invalid("frictional_heating.share", &share, "a fraction in [0, 1]"));
+        }
+        self.frictional_heating()?;
         Ok(())
     }
 

@@ -53,7 +53,6 @@ use faer::{Mat, Side};
 
 use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
-use crate::contact::FrictionLaw;
 use crate::la::vector::norm2 as norm;
 use crate::la::{FactorStage, LaError as Error};
 
@@ -210,14 +209,14 @@ pub fn descend(
     let t = stiffness.tangential;
     let n_t = stiffness.n_t;
     let n_nodes = stiffness.weights.len();
-    let law = step.friction;
+    let laws = step.laws;
     let mut w = start.w;
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
     let g_min = |w: &[f64]| {
         match frozen {
             Some(g) => g.iter().fold(f64::INFINITY, |m, v| m.min(*v)),
             None => (0..n_nodes)
-                .map(|i| law.bound(norm(&w[i * t..(i + 1) * t])))
+                .map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))
                 .fold(f64::INFINITY, f64::min),
         }
         .max(f64::MIN_POSITIVE)
@@ -251,7 +250,7 @@ pub fn descend(
             let s = match frozen {
                 // Tresca: the shrinkage argmin ½κ(s − r)² + ℓ g s.
                 Some(g) => (r - ell * g[i] / kappa).max(0.0),
-                None => radial_minimizer(law, kappa, ell, r, speed),
+                None => radial_minimizer(|s| laws.bound(i, s), kappa, ell, r, speed),
             };
             let scale = if r > 0.0 { s / r } else { 0.0 };
             for (k, j) in range.clone().enumerate() {
@@ -264,7 +263,7 @@ pub fn descend(
                 }
             }
             // The node's frictional heat moves w₀ by H Δh_i, the gradient by −(K H)_i Δh_i.
-            let heat_change = step.heat_rate * (norm(&w[range]) - speed);
+            let heat_change = laws.heat_change(i, speed, norm(&w[range]));
             if heat_change != 0.0 {
                 let row = &stiffness.kh[i * n_t..(i + 1) * n_t];
                 y.iter_mut().zip(row).for_each(|(yr, kr)| *yr -= kr * heat_change);
@@ -325,7 +324,7 @@ fn frozen_start(step: &CondensedStep, w_free: &[f64], w: &[f64], w0: &mut [f64])
     let t = step.tangential;
     let c = step.condensation;
     let heat: Vec<f64> = (0..c.n_h)
-        .map(|i| step.heat_rate * norm(&w[i * t..(i + 1) * t]))
+        .map(|i| step.laws.heat(i, norm(&w[i * t..(i + 1) * t])))
         .collect();
     for (r, w0) in w0.iter_mut().enumerate() {
         let row = &c.heat[r * c.n_h..(r + 1) * c.n_h];
@@ -333,7 +332,8 @@ fn frozen_start(step: &CondensedStep, w_free: &[f64], w: &[f64], w0: &mut [f64])
     }
 }
 
-/// The local minimizer over s ∈ [0, r] of f(s) = ½ κ (s − r)² + ℓ φ(s) (φ' = b ≥ 0) reached
+/// The local minimizer over s ∈ [0, r] of f(s) = ½ κ (s − r)² + ℓ φ(s) (φ' = b ≥ 0, the
+/// node's `bound`) reached
 /// downhill from `current`: where f'(current) > 0 the nearest root of
 /// f'(s) = κ (s − r) + ℓ b(s) below it (or 0), where f'(current) < 0 the nearest root above it
 /// (f'(r) = ℓ b(r) ≥ 0, so one exists). Each root is bracketed by a 32-interval scan and
@@ -345,11 +345,11 @@ fn frozen_start(step: &CondensedStep, w_free: &[f64], w: &[f64], w0: &mut [f64])
 /// rate), so the descent continues the solution the paper's solver would. The global
 /// minimizer of each block would jump to the deepest basin and pick another solution of a
 /// step with several (1–4 % apart in u on the paper's example).
-pub fn radial_minimizer(law: &dyn FrictionLaw, kappa: f64, ell: f64, r: f64, current: f64) -> f64 {
+pub fn radial_minimizer(bound: impl Fn(f64) -> f64, kappa: f64, ell: f64, r: f64, current: f64) -> f64 {
     if r <= 0.0 {
         return 0.0;
     }
-    let df = |s: f64| kappa * (s - r) + ell * law.bound(s);
+    let df = |s: f64| kappa * (s - r) + ell * bound(s);
     let start = current.clamp(0.0, r);
     let slope = df(start);
     if slope == 0.0 {
@@ -387,23 +387,25 @@ pub fn radial_minimizer(law: &dyn FrictionLaw, kappa: f64, ell: f64, r: f64, cur
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::friction::{SlipWeakening, Tresca};
+    use crate::contact::friction::{FrictionLaw, LawPoint, Tresca, VelocityWeakening};
 
     #[test]
     fn the_radial_minimizer_goes_downhill_to_the_nearest_local_minimum() {
         // Steep weakening: f has a local minimum at 0 and another one near r.
-        let law = SlipWeakening {
-            scale: 150.0,
+        let velocity_weakening = VelocityWeakening {
             a: 1.0,
             b: 0.05,
             alpha: 1000.0,
         };
+        let at = LawPoint::default();
+        let bound = |s: f64| velocity_weakening.bound(150.0, &at, s);
+        let law = &bound;
         let (kappa, ell) = (1.0e4, 1.0);
-        let f = |s: f64, r: f64| 0.5 * kappa * (s - r) * (s - r) + ell * law.potential(s);
-        let df = |s: f64, r: f64| kappa * (s - r) + ell * law.bound(s);
+        let f = |s: f64, r: f64| 0.5 * kappa * (s - r) * (s - r) + ell * velocity_weakening.potential(150.0, &at, s);
+        let df = |s: f64, r: f64| kappa * (s - r) + ell * bound(s);
         for r in [1e-4, 1e-3, 5e-3, 1e-2, 1.2e-2, 2e-2, 0.1] {
             for current in [0.0, 0.25 * r, 0.5 * r, r] {
-                let s = radial_minimizer(&law, kappa, ell, r, current);
+                let s = radial_minimizer(law, kappa, ell, r, current);
                 assert!((0.0..=r).contains(&s));
                 // Never uphill, and no lower point between the start and s (the nearest basin).
                 assert!(f(s, r) <= f(current, r), "r = {r}, from {current}: uphill");
@@ -418,7 +420,7 @@ mod tests {
                 // A local minimizer: a root of f' (to round-off) or 0 with f'(0) ≥ 0.
                 if s > 0.0 {
                     assert!(
-                        df(s, r).abs() <= 1e-9 * (kappa * r + ell * law.bound(0.0)),
+                        df(s, r).abs() <= 1e-9 * (kappa * r + ell * bound(0.0)),
                         "r = {r}: f'(s) = {}",
                         df(s, r)
                     );
@@ -430,16 +432,16 @@ mod tests {
         // A sticking node whose 0 is a local minimizer stays stuck, though slipping is lower.
         let r = 1.2e-2;
         assert!(df(0.0, r) > 0.0);
-        assert_eq!(radial_minimizer(&law, kappa, ell, r, 0.0), 0.0);
-        assert!(radial_minimizer(&law, kappa, ell, r, r) > 0.0);
+        assert_eq!(radial_minimizer(law, kappa, ell, r, 0.0), 0.0);
+        assert!(radial_minimizer(law, kappa, ell, r, r) > 0.0);
     }
 
     #[test]
     fn with_tresca_the_radial_minimizer_is_the_shrinkage() {
-        let law = Tresca { scale: 3.0 };
+        let at = LawPoint::default();
         // argmin ½κ(s − r)² + ℓ g s = max(r − ℓ g/κ, 0).
         for r in [0.0, 0.1, 0.5, 2.0] {
-            let s = radial_minimizer(&law, 2.0, 1.0, r, 0.0);
+            let s = radial_minimizer(|s| Tresca.bound(3.0, &at, s), 2.0, 1.0, r, 0.0);
             assert!((s - (r - 1.5f64).max(0.0)).abs() < 1e-12, "r = {r}: {s}");
         }
     }

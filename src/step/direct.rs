@@ -122,8 +122,19 @@ impl StepSystem {
 
     /// The right-hand side of step n without the contact terms ([`StepRhs::rhs`]).
     pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, Error> {
+        self.rhs_exchanging(problem, previous, t, None)
+    }
+
+    /// [`StepSystem::rhs`] with a nonlinear heat exchange evaluated at `exchange_at`.
+    fn rhs_exchanging(
+        &self,
+        problem: &Problem,
+        previous: &State,
+        t: f64,
+        exchange_at: Option<&[f64]>,
+    ) -> Result<Vec<f64>, Error> {
         let clock = Instant::now();
-        let rhs = self.operator.rhs(problem, previous, t)?;
+        let rhs = self.operator.rhs(problem, previous, t, exchange_at)?;
         self.count(|s| s.rhs_seconds += clock.elapsed().as_secs_f64());
         Ok(rhs)
     }
@@ -213,9 +224,15 @@ impl StepSystem {
     /// The first half of every step solver's step: the right-hand side b without contact terms,
     /// z = D⁻¹ L⁻¹ P J b over all of L, and x = L⁻ᵀ z on the contact unknowns only (the trailing
     /// block; [`crate::la::QuasiDefiniteLdlt`]), whose tangential velocities are w_τ^free of the condensed
-    /// problem.
-    pub fn free_step(&self, problem: &Problem, previous: &State, t: f64) -> Result<FreeStep, Error> {
-        let mut x = self.rhs(problem, previous, t)?;
+    /// problem. A nonlinear heat exchange is evaluated at `exchange_at` (default Θ_{n−1}).
+    pub fn free_step(
+        &self,
+        problem: &Problem,
+        previous: &State,
+        t: f64,
+        exchange_at: Option<&[f64]>,
+    ) -> Result<FreeStep, Error> {
+        let mut x = self.rhs_exchanging(problem, previous, t, exchange_at)?;
         let clock = Instant::now();
         let factor = &self.factor;
         let n = self.n_unknowns();

@@ -26,8 +26,8 @@ use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use super::paper::{PaperParams, PaperSolver};
 use super::StepError as Error;
 use super::{Criterion, SolveError, StepFailure, StepInfo};
-use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
-use crate::model::{contact_tangential, friction_bounds, Problem, State};
+use crate::la::vector::max_abs_diff as max_diff;
+use crate::model::{contact_tangential, ContactLaws, Problem, State};
 
 /// Semismooth Newton on the condensed problem, falling back to [`PaperSolver`]'s loop and to
 /// the descent.
@@ -40,10 +40,16 @@ pub struct FastSolver<'a> {
     max_sweeps: usize,
     /// K = D⁻¹ on Γ_C, inverted at the first convexification iterate (or descent).
     stiffness: OnceCell<ContactStiffness>,
-    steepness: f64,
+    /// max_i C_ii, the largest nodal contact compliance.
+    max_compliance: f64,
 }
 
 impl<'a> FastSolver<'a> {
+    /// The problem and ε_conv.
+    pub(super) fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
+        (self.problem, self.paper_params.tolerance)
+    }
+
     /// Sets the solver up (the condensation is shared with the fallback solver); `max_sweeps`
     /// caps the descent's sweeps (0 switches it off).
     pub fn new(
@@ -56,7 +62,6 @@ impl<'a> FastSolver<'a> {
         let condensation = paper.condensation();
         let n_t = condensation.n_t;
         let max_compliance = (0..n_t).map(|i| condensation.friction[i * n_t + i]).fold(0.0, f64::max);
-        let steepness = max_compliance * (-problem.friction.bound_derivative(0.0)).max(0.0);
         FastSolver {
             problem,
             paper,
@@ -64,16 +69,17 @@ impl<'a> FastSolver<'a> {
             params,
             max_sweeps,
             stiffness: OnceCell::new(),
-            steepness,
+            max_compliance,
         }
     }
 
-    /// max_i C_ii · max(−b'(0), 0): how much faster the friction bound weakens than the
-    /// body's contact compliance can follow. Below 1 the nodal step problems are monotone and
-    /// Newton on the nonmonotone law is safe; at or above 1 they may have several solutions and
-    /// each step goes through the convexification loop (with Newton inner solves) directly.
-    pub fn steepness(&self) -> f64 {
-        self.steepness
+    /// max_i C_ii · max_i m_τ,i (m_τ = sup max(−b′, 0), the law's steepest fall): how much
+    /// faster the friction bound weakens than the body's contact compliance can follow. Below 1
+    /// the nodal step problems are monotone and Newton on the nonmonotone law is safe; at or
+    /// above 1 they may have several solutions and each step goes through the convexification
+    /// loop (with Newton inner solves) directly.
+    pub fn steepness(&self, laws: &ContactLaws) -> f64 {
+        self.max_compliance * laws.steepest_fall()
     }
 
     fn condensation(&self) -> &Condensation {
@@ -85,18 +91,19 @@ impl<'a> FastSolver<'a> {
         self.paper.system()
     }
 
-    /// One step of the system's size k, from `previous` to the state at time `t`.
-    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
+    /// One step of the system's size k, from `previous` to the state at time `laws.t`.
+    pub fn step(&self, previous: &State, laws: &ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let problem = self.problem;
         let system = self.system();
         let tangential = problem.dim() - 1;
-        let mut free = system.free_step(problem, previous, t)?;
+        let t = laws.t;
+        let steepness = self.steepness(laws);
+        let mut free = system.free_step(problem, previous, t, laws.exchange_temperature.as_deref())?;
         let w_free = std::mem::take(&mut free.w_free);
 
         let step = CondensedStep {
             condensation: self.condensation(),
-            friction: problem.friction.as_ref(),
-            heat_rate: problem.heating.heat(t, 1.0),
+            laws,
             tangential,
             augmentation: self.paper.augmentation,
             lu_cache: Default::default(),
@@ -104,7 +111,7 @@ impl<'a> FastSolver<'a> {
         let guess_w = contact_tangential(problem, &previous.w);
         let guess_xi = previous.xi.clone();
         let mut info = StepInfo::default();
-        let direct = if self.steepness < 1.0 {
+        let direct = if steepness < 1.0 {
             step.solve(&w_free, guess_w.clone(), guess_xi.clone(), None, self.params)
         } else {
             None
@@ -118,7 +125,7 @@ impl<'a> FastSolver<'a> {
                 // Newton on the nonmonotone law cycles where the law is steep: convexify as the
                 // paper does, solving each convex problem by Newton.
                 info.fallback = true;
-                if self.steepness < 1.0 {
+                if steepness < 1.0 {
                     info.newton_iterations = self.params.max_iterations;
                 }
                 match self.convexified(&step, &w_free, guess_w.clone(), guess_xi, &mut info) {
@@ -130,13 +137,7 @@ impl<'a> FastSolver<'a> {
                 }
             }
         };
-        let heat: Vec<f64> = (0..problem.contact.len())
-            .map(|i| {
-                problem
-                    .heating
-                    .heat(t, norm(&result.w[i * tangential..(i + 1) * tangential]))
-            })
-            .collect();
+        let heat = laws.heats(&result.w);
         let xi = result.xi;
         let state = system.loaded_state(problem, previous, t, &mut free, xi, &heat)?;
         Ok((state, info))
@@ -303,7 +304,7 @@ impl ConvexSubproblem for CondensedConvex<'_, '_> {
         let (solver, step) = (self.solver, self.step);
         let t = step.tangential;
         let tolerance = solver.paper_params.tolerance;
-        let bounds = friction_bounds(solver.problem, &iterate.w);
+        let bounds = step.laws.bounds(&iterate.w);
         let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
         self.g_min = g_min;
         let Some(inner) = solver

@@ -113,7 +113,7 @@ fn ilu_needs_amg(
     order: &[usize],
     (a, ilu): (&CsrMatrix, &Ilu0),
 ) -> Result<bool, StepError> {
-    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step())?;
+    let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step(), None)?;
     let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
     let mut x = vec![0.0; b.len()];
     let probe = KrylovParams {
@@ -244,10 +244,17 @@ impl KrylovSystem {
     }
 
     /// The start of a step from `previous` to time `t`, in this system's order: b (its linear
-    /// part, without the contact terms) and the previous step's unknowns, the first iterate.
-    pub(super) fn start(&self, problem: &Problem, previous: &State, t: f64) -> Result<(Vec<f64>, Vec<f64>), StepError> {
+    /// part, without the contact terms; a nonlinear heat exchange at `exchange_at`) and the
+    /// previous step's unknowns, the first iterate.
+    pub(super) fn start(
+        &self,
+        problem: &Problem,
+        previous: &State,
+        t: f64,
+        exchange_at: Option<&[f64]>,
+    ) -> Result<(Vec<f64>, Vec<f64>), StepError> {
         let clock = Instant::now();
-        let b_unordered = self.rhs.rhs(problem, previous, t)?;
+        let b_unordered = self.rhs.rhs(problem, previous, t, exchange_at)?;
         let b: Vec<f64> = self.order.iter().map(|&o| b_unordered[o]).collect();
         let x_previous = self.rhs.unknowns_of(problem, previous);
         let x: Vec<f64> = self.order.iter().map(|&o| x_previous[o]).collect();
@@ -259,7 +266,7 @@ impl KrylovSystem {
     /// `previous` to time `t`, in the unknowns' numbering: with [`KrylovSystem::solve`], the
     /// first step's system of studies and tests.
     pub fn rhs(&self, problem: &Problem, previous: &State, t: f64) -> Result<Vec<f64>, StepError> {
-        Ok(self.rhs.rhs(problem, previous, t)?)
+        Ok(self.rhs.rhs(problem, previous, t, None)?)
     }
 
     /// Solves A x = b with the step matrix itself (its Γ_C rows as assembled, no contact

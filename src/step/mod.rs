@@ -278,6 +278,8 @@ pub struct StepInfo {
     pub cutback_depth: usize,
     /// Krylov iterations of the iterative path's linear solves (0 on the direct path).
     pub krylov_iterations: usize,
+    /// Iterates of the fixed point on a nonlinear heat exchange (0 where ∂j is affine).
+    pub exchange_iterations: usize,
 }
 
 impl StepInfo {
@@ -292,6 +294,7 @@ impl StepInfo {
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;
+        self.exchange_iterations += other.exchange_iterations;
     }
 }
 

@@ -28,8 +28,8 @@ use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
 use super::condensed::Condensation;
-use crate::contact::FrictionLaw;
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
+use crate::model::ContactLaws;
 
 /// Settings of the semismooth Newton method.
 #[derive(Debug, Clone, Copy)]
@@ -43,10 +43,9 @@ pub struct NewtonParams {
 /// The condensed contact problem of one time step.
 pub struct CondensedStep<'a> {
     pub condensation: &'a Condensation,
-    pub friction: &'a dyn FrictionLaw,
-    /// λ(t_n) of h_τ(t_n, r) = λ(t_n) r, per contact node (0 where θ is prescribed has no
-    /// effect: the corresponding columns of H vanish).
-    pub heat_rate: f64,
+    /// The step's laws: the friction bounds and the frictional heat at each contact node (where
+    /// θ is prescribed the heat has no effect: the corresponding columns of H vanish).
+    pub laws: &'a ContactLaws<'a>,
     /// d − 1.
     pub tangential: usize,
     /// Augmentation parameter r of the Alart–Curnier function (any r > 0 gives the same
@@ -76,7 +75,7 @@ impl CondensedStep<'_> {
 
     fn heat(&self, w: &[f64]) -> Vec<f64> {
         (0..self.nodes())
-            .map(|i| self.heat_rate * norm(&w[self.range(i)]))
+            .map(|i| self.laws.heat(i, norm(&w[self.range(i)])))
             .collect()
     }
 
@@ -101,7 +100,7 @@ impl CondensedStep<'_> {
         let n_nodes = self.nodes();
         let r = self.augmentation;
         let (c, h) = (&self.condensation.friction, &self.condensation.heat);
-        let g_scale = self.friction.bound(0.0).max(f64::MIN_POSITIVE);
+        let g_scale = self.laws.largest_bound_at_rest().max(f64::MIN_POSITIVE);
         for iteration in 1..=params.max_iterations {
             // Active sets and the per-node elimination ξ_i = a_i + B_i w_i at slip nodes.
             let mut stick = vec![false; n_nodes];
@@ -113,7 +112,7 @@ impl CondensedStep<'_> {
                 let speed = norm(wi);
                 let (bound, slope) = match frozen {
                     Some(g) => (g[i], 0.0),
-                    None => (self.friction.bound(speed), self.friction.bound_derivative(speed)),
+                    None => (self.laws.bound(i, speed), self.laws.bound_derivative(i, speed)),
                 };
                 let mut q = [0.0; 2];
                 for k in 0..t {
@@ -130,6 +129,9 @@ impl CondensedStep<'_> {
             }
             // Assemble J z = rhs for z = (ξ at stick nodes, w at slip nodes), flat indices.
             let heat = self.heat(&w);
+            let heat_slope: Vec<f64> = (0..n_nodes)
+                .map(|j| self.laws.heat_derivative(j, norm(&w[self.range(j)])))
+                .collect();
             let mut jac = Mat::<f64>::zeros(n_t, n_t);
             let mut rhs = Mat::<f64>::zeros(n_t, 1);
             for row in 0..n_t {
@@ -156,7 +158,7 @@ impl CondensedStep<'_> {
                         // Heat linearized at w: H h(w) + H h'(w)(w⁺ − w).
                         if speed > 0.0 {
                             for (k, col_w) in cols.enumerate() {
-                                let dh = self.heat_rate * wj[k] / speed;
+                                let dh = heat_slope[j] * wj[k] / speed;
                                 jac[(row, col_w)] -= h_rj * dh;
                                 value -= h_rj * dh * wj[k];
                             }
@@ -248,7 +250,7 @@ impl CondensedStep<'_> {
             let range = self.range(i);
             let bound = match frozen {
                 Some(g) => g[i],
-                None => self.friction.bound(norm(&w[range.clone()])),
+                None => self.laws.bound(i, norm(&w[range.clone()])),
             };
             e2 = e2.max(node_law_residual(
                 &w[range.clone()],

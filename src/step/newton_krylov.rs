@@ -59,7 +59,7 @@ use super::newton::{node_law_residual, slip_linearization};
 use super::{Criterion, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::la::{CsrMatrix, Ilu0};
-use crate::model::{friction_bounds, Problem, State};
+use crate::model::{ContactLaws, Problem, State};
 
 /// How one node is linearized.
 enum Linearized {
@@ -80,8 +80,8 @@ struct Linearization<'s> {
     ilu: &'s mut Ilu0,
     /// b without the contact terms, in the system's order.
     b: &'s [f64],
-    /// λ(t_n) of h(t_n, r) = λ r.
-    heat_rate: f64,
+    /// The laws of the step (the frictional heat).
+    laws: &'s ContactLaws<'s>,
     /// d − 1.
     td: usize,
     rhs: Vec<f64>,
@@ -112,7 +112,7 @@ impl Linearization<'_> {
         for (i, node) in sys.nodes.iter().enumerate() {
             let range = i * td..(i + 1) * td;
             if let Some(row) = node.theta {
-                rhs[row] += node.weight * self.heat_rate * norm(&w[range.clone()]);
+                rhs[row] += node.weight * self.laws.heat(i, norm(&w[range.clone()]));
             }
             let m = node.tangent.len();
             let (mut wi, mut xii, mut q) = ([0.0; 2], [0.0; 2], [0.0; 2]);
@@ -203,6 +203,11 @@ pub struct NewtonKrylov<'a> {
 }
 
 impl<'a> NewtonKrylov<'a> {
+    /// The problem and ε_conv.
+    pub(super) fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
+        (self.problem, self.tolerance)
+    }
+
     /// The solver of `problem` on `system`, stopping at `tolerance` (ε_conv) within
     /// `max_iterations` Newton iterations per step.
     pub fn new(problem: &'a Problem, system: KrylovSystem, tolerance: f64, max_iterations: usize) -> Self {
@@ -219,14 +224,15 @@ impl<'a> NewtonKrylov<'a> {
         &self.system
     }
 
-    /// One step of the system's size k, from `previous` to the state at time `t`: the
+    /// One step of the system's size k, from `previous` to the state at time `laws.t`: the
     /// convexification loop, each convex problem solved by Newton iterations.
-    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
+    pub fn step(&self, previous: &State, laws: &ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let problem = self.problem;
         let sys = &self.system;
         let td = problem.dim() - 1;
         let n = sys.order.len();
-        let (b, x) = sys.start(problem, previous, t)?;
+        let t = laws.t;
+        let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
 
         let w = self.tangential(&x);
         let xi = previous.xi.clone();
@@ -240,7 +246,7 @@ impl<'a> NewtonKrylov<'a> {
                 a,
                 ilu,
                 b: &b,
-                heat_rate: problem.heating.heat(t, 1.0),
+                laws,
                 td,
                 rhs: vec![0.0; n],
                 residual: Vec::new(),
@@ -313,7 +319,8 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         info: &mut StepInfo,
     ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
         let solver = self.solver;
-        let frozen = friction_bounds(solver.problem, &iterate.w);
+        let laws = self.linearization.laws;
+        let frozen = laws.bounds(&iterate.w);
         let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
         let (w_outer, xi_outer) = (iterate.w.clone(), iterate.xi.clone());
         self.inner_converged = false;
@@ -329,7 +336,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             }
         }
         let (w, xi) = (&iterate.w, &iterate.xi);
-        let bounds = friction_bounds(solver.problem, w);
+        let bounds = laws.bounds(w);
         let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
         let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let law = solver.law_residual(w, xi, &bounds);

@@ -26,7 +26,7 @@ use crate::contact::project_to_ball;
 use crate::la::vector::norm2;
 use crate::model::norms::relative_increments;
 use crate::model::Problem;
-use crate::model::{contact_tangential, friction_bounds, State};
+use crate::model::{contact_tangential, ContactLaws, State};
 
 /// Settings of the paper's solver.
 #[derive(Debug, Clone, Copy)]
@@ -52,6 +52,11 @@ pub struct PaperSolver<'a> {
 }
 
 impl<'a> PaperSolver<'a> {
+    /// The problem and ε_conv.
+    pub(super) fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
+        (self.problem, self.params.tolerance)
+    }
+
     /// Sets the solver up: condenses onto Γ_C and picks the augmentation parameter.
     pub fn new(problem: &'a Problem, system: StepSystem, params: PaperParams) -> Result<Self, Error> {
         let condensation = Condensation::new(problem, &system)?;
@@ -76,9 +81,10 @@ impl<'a> PaperSolver<'a> {
         &self.condensation
     }
 
-    /// One step of the system's size k, from `previous` to the state at time `t`.
-    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
-        let mut free = self.system.free_step(self.problem, previous, t)?;
+    /// One step of the system's size k, from `previous` to the state at time `laws.t`.
+    pub fn step(&self, previous: &State, laws: &ContactLaws) -> Result<(State, StepInfo), SolveError> {
+        let t = laws.t;
+        let mut free = (self.system).free_step(self.problem, previous, t, laws.exchange_temperature.as_deref())?;
         let w_free = std::mem::take(&mut free.w_free);
         let mut loaded = CondensedStep {
             solver: self,
@@ -93,7 +99,7 @@ impl<'a> PaperSolver<'a> {
             &self.params,
             self.augmentation,
             "paper",
-            (previous, k, t),
+            (previous, k, laws),
             &mut loaded,
         )
     }
@@ -135,7 +141,7 @@ impl LoadedStep for CondensedStep<'_, '_> {
     }
 }
 
-/// The paper's loop (Problem 17) for one step of size k from `previous` to time `t`:
+/// The paper's loop (Problem 17) for one step of size k from `previous` to time `laws.t`:
 /// convexification ([`convexify`]) around Uzawa iterations with the augmentation r, on
 /// whatever answers the loaded step.
 pub(super) fn paper_step(
@@ -143,19 +149,17 @@ pub(super) fn paper_step(
     params: &PaperParams,
     augmentation: f64,
     solver: &'static str,
-    (previous, k, t): (&State, f64, f64),
+    (previous, k, laws): (&State, f64, &ContactLaws),
     step: &mut impl LoadedStep,
 ) -> Result<(State, StepInfo), SolveError> {
+    let t = laws.t;
     // Iterate m = 0 is the previous step's solution (u advanced by k w_{n−1}).
     let mut state = previous.clone();
     state.n = previous.n + 1;
     state.t = t;
     state.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
     let w = contact_tangential(problem, &previous.w);
-    let tangential = problem.dim() - 1;
-    let heat: Vec<f64> = (0..problem.contact.len())
-        .map(|i| problem.heating.heat(t, norm2(&w[i * tangential..(i + 1) * tangential])))
-        .collect();
+    let heat = laws.heats(&w);
     let iterate = PaperIterate {
         state,
         xi: previous.xi.clone(),
@@ -167,7 +171,7 @@ pub(super) fn paper_step(
         params,
         augmentation,
         solver,
-        t,
+        laws,
         step,
     };
     let loop_params = LoopParams {
@@ -194,7 +198,7 @@ struct Uzawa<'p, S> {
     params: &'p PaperParams,
     augmentation: f64,
     solver: &'static str,
-    t: f64,
+    laws: &'p ContactLaws<'p>,
     step: &'p mut S,
 }
 
@@ -211,12 +215,12 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
         inner_tolerance: f64,
         info: &mut StepInfo,
     ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
-        let (problem, t) = (self.problem, self.t);
+        let (problem, laws) = (self.problem, self.laws);
         let tangential = problem.dim() - 1;
         let n_contact = problem.contact.len();
         let PaperIterate { state, xi, w, heat } = iterate;
         // Problem 17_n^m: the bound frozen at the previous iterate.
-        let bounds = friction_bounds(problem, w);
+        let bounds = laws.bounds(w);
         let g_max = bounds.iter().cloned().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
         let mut converged = false;
         let mut change = f64::INFINITY;
@@ -239,7 +243,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
             let mut heat_change: f64 = 0.0;
             let mut heat_scale: f64 = 0.0;
             for (i, h) in heat.iter_mut().enumerate() {
-                let new = problem.heating.heat(t, norm2(&w[i * tangential..(i + 1) * tangential]));
+                let new = laws.heat(i, norm2(&w[i * tangential..(i + 1) * tangential]));
                 heat_change = heat_change.max((new - *h).abs());
                 heat_scale = heat_scale.max(new.abs());
                 *h = new;

@@ -22,7 +22,7 @@ use super::{SolveError, StepInfo};
 use crate::la::vector::largest_eigenvalue;
 use crate::la::{CsrMatrix, Ilu0};
 use crate::model::Problem;
-use crate::model::State;
+use crate::model::{ContactLaws, State};
 
 /// The paper's solver on a [`KrylovSystem`].
 pub struct PaperKrylov<'a> {
@@ -34,6 +34,11 @@ pub struct PaperKrylov<'a> {
 }
 
 impl<'a> PaperKrylov<'a> {
+    /// The problem and ε_conv.
+    pub(super) fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
+        (self.problem, self.params.tolerance)
+    }
+
     /// The solver on `system` (its matrix is A, as set up: this solver never linearizes it);
     /// finds r by power iteration.
     pub fn new(problem: &'a Problem, system: KrylovSystem, params: PaperParams) -> Result<Self, Error> {
@@ -51,10 +56,11 @@ impl<'a> PaperKrylov<'a> {
         &self.system
     }
 
-    /// One step of the system's size k, from `previous` to the state at time `t`.
-    pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
+    /// One step of the system's size k, from `previous` to the state at time `laws.t`.
+    pub fn step(&self, previous: &State, laws: &ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let (problem, sys) = (self.problem, &self.system);
-        let (b, x) = sys.start(problem, previous, t)?;
+        let t = laws.t;
+        let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
         let mut guard = sys.lock();
         let (a, ilu) = &mut *guard;
         let mut loaded = KrylovStep {
@@ -78,7 +84,7 @@ impl<'a> PaperKrylov<'a> {
             &self.params,
             self.augmentation,
             "paper",
-            (previous, k, t),
+            (previous, k, laws),
             &mut loaded,
         )?;
         info.krylov_iterations = loaded.krylov_iterations;

@@ -334,7 +334,7 @@ pub fn make_figures(
         columns: 1,
         scale: options.scale,
         gamma_c: gamma_c.clone(),
-        force_unit: main.problem.friction.bound(0.0),
+        force_unit: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
     };
     files.extend(figures::write(&fig2, dir)?);
 
@@ -362,7 +362,7 @@ pub fn make_figures(
             columns: 1,
             scale: options.scale,
             gamma_c: gamma_c.clone(),
-            force_unit: main.problem.friction.bound(0.0),
+            force_unit: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
         };
         if !fig3.panels.is_empty() {
             files.extend(figures::write(&fig3, dir)?);
@@ -409,7 +409,7 @@ pub fn make_figures(
             .map(|s| (s.record.t, s.record.contact.clone()))
             .collect(),
         gamma_c,
-        bound_at_rest: main.problem.friction.bound(0.0),
+        bound_at_rest: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
     };
     files.extend(figures::write(&profiles, dir)?);
 

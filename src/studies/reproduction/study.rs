@@ -353,7 +353,12 @@ pub fn run_study(
             expansion: base.material.thermal_expansion,
             slip_tolerance: base.solver.slip_tolerance,
             lengths: grid.lengths.clone(),
-            foundation_temperature: base.heat_exchange.foundation_temperature,
+            foundation_temperature: match base.heat_exchange {
+                crate::scenario::HeatExchangeSpec::Linear {
+                    foundation_temperature, ..
+                } => foundation_temperature,
+                _ => f64::NAN,
+            },
             wave_speeds: wave_speeds(base),
             paper_example: is_paper_example(base),
         },

@@ -273,10 +273,10 @@ impl Manufactured {
     /// inside the disc that reaches −μ(0)S sgn A at the onset of slip.
     pub fn friction_stress(&self, problem: &Problem, x: f64, slip_rate: f64, t: f64) -> f64 {
         if slip_rate != 0.0 {
-            -problem.friction.bound(slip_rate.abs()) * slip_rate.signum()
+            -problem.friction_bound([x, 0.0, 0.0], t, slip_rate.abs()) * slip_rate.signum()
         } else {
             let ramp = (t / self.slip_onset(x)).min(1.0);
-            -problem.friction.bound(0.0) * ramp * ramp * self.slip_amplitude.signum()
+            -problem.friction_bound([x, 0.0, 0.0], t, 0.0) * ramp * ramp * self.slip_amplitude.signum()
         }
     }
 
@@ -294,7 +294,14 @@ impl Manufactured {
         let k = self.kinematics(x[0], x[1], t);
         let normal = CONTACT_NORMAL;
         let flux = problem.material.conductivity * (k.theta.grad[0] * normal[0] + k.theta.grad[1] * normal[1]);
-        flux + problem.exchange.derivative(k.theta.value) - problem.heating.heat(t, self.slip_rate(problem, &k).abs())
+        let at = crate::contact::LawPoint {
+            x,
+            t,
+            slip_distance: 0.0,
+        };
+        let heating = &problem.heating;
+        let heat = heating.share * heating.law.heat(&at, self.slip_rate(problem, &k).abs());
+        flux + problem.exchange.flux(&at, k.theta.value) - heat
     }
 }
 
@@ -412,7 +419,7 @@ mod tests {
     #[test]
     fn friction_stress_is_a_selection_of_the_law() {
         let (m, p) = setup();
-        let law = p.friction.as_ref();
+        let law = |r: f64| p.friction_bound([0.0; 3], 0.0, r);
         for (x, t) in [(3.0, 0.2), (3.0, 0.349), (3.0, 0.36), (1.0, 0.9), (3.9, 1.0)] {
             let w = m.kinematics(x, 0.0, t).w[0].value;
             let xi = m.friction_stress(&p, x, w, t);

@@ -313,6 +313,8 @@ pub fn manufactured(n_levels: usize, progress: &mut dyn FnMut(&LevelRun)) -> Res
                     u: vec![0.0; state.u.len()],
                     theta: vec![0.0; state.theta.len()],
                     xi: Vec::new(),
+                    slip_distance: Vec::new(),
+                    slip_distance_before: Vec::new(),
                 };
                 norms.push(&exact_errors(&problem, &zero, &exact, t));
             }

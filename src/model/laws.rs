@@ -1,0 +1,211 @@
+//! The laws on Γ_C as a problem holds them (each friction law with its scale and its contact
+//! parts, the heat exchange, the frictional heating and its share), and as a time step reads
+//! them: node by node, at the step's time and the nodes' slip distances ([`ContactLaws`]).
+//!
+//! Depends on: [`super::problem`], [`crate::contact`], [`crate::loads`].
+
+use super::error::ModelError as Error;
+use super::problem::Problem;
+use crate::contact::{FrictionLaw, FrictionalHeating, LawPoint};
+use crate::la::vector::norm2;
+use crate::loads::Datum;
+
+/// A friction law with its scale S (a datum of x and t: a number, affine in t, or an
+/// expression) on some contact parts: the bound is b(r) = S(x, t) μ(r).
+#[derive(Debug)]
+pub struct Friction {
+    /// S.
+    pub scale: Datum,
+    /// μ.
+    pub law: Box<dyn FrictionLaw>,
+    /// The contact parts it holds on (mesh part indices); empty: every contact part not named
+    /// by another law.
+    pub parts: Vec<usize>,
+}
+
+/// The frictional heating h_τ and the share of it that enters the body (the paper: 1).
+#[derive(Debug)]
+pub struct Heating {
+    pub law: Box<dyn FrictionalHeating>,
+    /// The fraction of the frictional power h_τ that enters the body.
+    pub share: f64,
+}
+
+/// The laws of one time step at the contact nodes: x_i, t_n and the slip distances s_i fixed,
+/// the scale evaluated once; what the step solvers read instead of the laws themselves.
+pub struct ContactLaws<'p> {
+    problem: &'p Problem,
+    /// t_n.
+    pub t: f64,
+    points: Vec<LawPoint>,
+    /// S(x_i, t_n).
+    scales: Vec<f64>,
+    /// The temperatures at which a nonlinear heat exchange is evaluated this step (`None`
+    /// where the exchange is affine, in the step matrix).
+    pub exchange_temperature: Option<Vec<f64>>,
+}
+
+impl<'p> ContactLaws<'p> {
+    /// The laws at time `t` with the slip distances `slip_distance` (one per contact node).
+    pub fn new(problem: &'p Problem, t: f64, slip_distance: &[f64]) -> Result<Self, Error> {
+        // An empty `slip_distance` (a checkpoint older than it) reads as zeros.
+        let points: Vec<LawPoint> = (problem.contact.iter().enumerate())
+            .map(|(i, node)| LawPoint {
+                x: problem.mesh.coords[node.node],
+                t,
+                slip_distance: slip_distance.get(i).copied().unwrap_or(0.0),
+            })
+            .collect();
+        let mut scales = Vec::with_capacity(points.len());
+        for (i, at) in points.iter().enumerate() {
+            let friction = &problem.friction[problem.friction_of_node[i]];
+            let mut s = [0.0];
+            friction.scale.eval(at.x, t, &mut s);
+            if !s[0].is_finite() || s[0] < 0.0 {
+                return Err(Error::BadFrictionScale {
+                    value: s[0],
+                    x: at.x,
+                    t,
+                });
+            }
+            scales.push(s[0]);
+        }
+        Ok(ContactLaws {
+            problem,
+            t,
+            points,
+            scales,
+            exchange_temperature: None,
+        })
+    }
+
+    /// The laws that the step to `state` solved: at its time, with the slip distances before
+    /// it (what the outputs report the state against).
+    pub fn of_state(problem: &'p Problem, state: &super::State) -> Result<Self, Error> {
+        Self::new(problem, state.t, &state.slip_distance_before)
+    }
+
+    fn law(&self, i: usize) -> &dyn FrictionLaw {
+        self.problem.friction[self.problem.friction_of_node[i]].law.as_ref()
+    }
+
+    /// Number of contact nodes.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether Γ_C has no contact node.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The point of contact node i.
+    pub fn point(&self, i: usize) -> &LawPoint {
+        &self.points[i]
+    }
+
+    /// b_i(r) at contact node i.
+    #[inline]
+    pub fn bound(&self, i: usize, r: f64) -> f64 {
+        self.law(i).bound(self.scales[i], &self.points[i], r)
+    }
+
+    /// b_i′(r).
+    #[inline]
+    pub fn bound_derivative(&self, i: usize, r: f64) -> f64 {
+        self.law(i).bound_derivative(self.scales[i], &self.points[i], r)
+    }
+
+    /// ∫₀^r b_i.
+    pub fn potential(&self, i: usize, r: f64) -> f64 {
+        self.law(i).potential(self.scales[i], &self.points[i], r)
+    }
+
+    /// The friction bounds b_i(|w_i|) for w_τ node-major in tangent coordinates (d − 1 per
+    /// node): the bounds a convexification iterate freezes.
+    pub fn bounds(&self, w: &[f64]) -> Vec<f64> {
+        let td = self.problem.dim() - 1;
+        (0..self.len())
+            .map(|i| self.bound(i, norm2(&w[i * td..(i + 1) * td])))
+            .collect()
+    }
+
+    /// The smallest bound at rest, min_i b_i(0) (the scale of the law's residuals).
+    pub fn smallest_bound_at_rest(&self) -> f64 {
+        (0..self.len())
+            .map(|i| self.bound(i, 0.0))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The largest bound at rest, max_i b_i(0).
+    pub fn largest_bound_at_rest(&self) -> f64 {
+        (0..self.len()).map(|i| self.bound(i, 0.0)).fold(0.0, f64::max)
+    }
+
+    /// max_i S_i m_τ,i: the steepest fall of the friction bounds (m_τ of H(j_τ)(d)), from each
+    /// law's [`FrictionLaw::constants`] (one evaluation per law where it does not depend on x).
+    pub fn steepest_fall(&self) -> f64 {
+        let mut per_law: Vec<Option<f64>> = vec![None; self.problem.friction.len()];
+        let mut worst: f64 = 0.0;
+        for i in 0..self.len() {
+            let k = self.problem.friction_of_node[i];
+            let law = self.law(i);
+            let m = match per_law[k] {
+                Some(m) => m,
+                None => {
+                    let m = law.constants(&self.points[i]).1;
+                    if law.uniform() {
+                        per_law[k] = Some(m);
+                    }
+                    m
+                }
+            };
+            worst = worst.max(self.scales[i] * m);
+        }
+        worst
+    }
+
+    /// The heat entering the body at contact node i slipping at rate r: share · h_τ(x_i, t, r).
+    #[inline]
+    pub fn heat(&self, i: usize, r: f64) -> f64 {
+        let heating = &self.problem.heating;
+        let h = heating.law.heat(&self.points[i], r);
+        if heating.share == 1.0 {
+            h
+        } else {
+            heating.share * h
+        }
+    }
+
+    /// heat(i, to) − heat(i, from).
+    #[inline]
+    pub fn heat_change(&self, i: usize, from: f64, to: f64) -> f64 {
+        let heating = &self.problem.heating;
+        let h = heating.law.heat_change(&self.points[i], from, to);
+        if heating.share == 1.0 {
+            h
+        } else {
+            heating.share * h
+        }
+    }
+
+    /// ∂/∂r of [`ContactLaws::heat`].
+    #[inline]
+    pub fn heat_derivative(&self, i: usize, r: f64) -> f64 {
+        let heating = &self.problem.heating;
+        let h = heating.law.heat_derivative(&self.points[i], r);
+        if heating.share == 1.0 {
+            h
+        } else {
+            heating.share * h
+        }
+    }
+
+    /// The frictional heats at the contact nodes for w_τ node-major.
+    pub fn heats(&self, w: &[f64]) -> Vec<f64> {
+        let td = self.problem.dim() - 1;
+        (0..self.len())
+            .map(|i| self.heat(i, norm2(&w[i * td..(i + 1) * td])))
+            .collect()
+    }
+}
