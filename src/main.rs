@@ -715,6 +715,9 @@ fn print_setup(s: &Scenario) {
         s.boundary.temperature,
         s.material.thermal_expansion,
     );
+    for warning in &s.warnings {
+        eprintln!("warning: {warning}");
+    }
 }
 
 fn print_summary(s: &Summary) {

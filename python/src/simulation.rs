@@ -489,6 +489,13 @@ impl PyContact {
     }
 }
 
+impl PyContact {
+    /// Whether the rows carry the slip distance (a law weakens with it).
+    fn with_slip_distance(&self) -> bool {
+        self.rows.first().is_some_and(|r| r.slip_distance.is_some())
+    }
+}
+
 #[pymethods]
 impl PyContact {
     /// Number of slipping nodes.
@@ -500,14 +507,14 @@ impl PyContact {
     /// Column names of table(), as in the contact CSV files.
     #[getter]
     fn columns(&self) -> Vec<&'static str> {
-        contact_csv_header(self.dim)
+        contact_csv_header(self.dim, self.with_slip_distance())
     }
 
     /// The table of the command line's contact_NNNN.csv: (c, len(columns)) float64, slip as
     /// 1.0 / 0.0.
     fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let rows = contact_csv_rows(self.dim, &self.rows);
-        matrix(py, rows.concat(), contact_csv_header(self.dim).len())
+        matrix(py, rows.concat(), contact_csv_header(self.dim, self.with_slip_distance()).len())
     }
 
     fn __len__(&self) -> usize {

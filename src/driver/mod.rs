@@ -66,7 +66,7 @@ use stop::Stop;
 pub use snapshot::{contact_csv_header, contact_csv_rows, record};
 pub use stop::StopFlag;
 pub use summary::{
-    AmgRecord, CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings,
+    AmgRecord, CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
 };
 
 /// How to run.
@@ -183,6 +183,9 @@ pub fn run_observed(
     let files = Files::claim(problem, plan, options, &tally)?;
     let (levels, timings) = setup::levels(problem, params)?;
     let mut recorder = Recorder::new(problem, params, plan, &levels, tally, timings, started);
+    if options.log {
+        recorder.header_lines().iter().for_each(|line| println!("{line}"));
+    }
     if let Some(files) = &files {
         files.open(&recorder)?;
     }

@@ -3,10 +3,11 @@
 
 use std::time::Instant;
 
-use super::summary::{AmgRecord, CutbackRecord, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings};
+use super::summary::{
+    AmgRecord, CutbackRecord, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
+};
 use super::OutputPlan;
-use crate::model::Problem;
-use crate::model::State;
+use crate::model::{LawConstants, Problem, State};
 use crate::step::{LinearKind, PreconditionerKind, SolverKind, SolverParams, StepInfo, StepSolver};
 use crate::time::Levels;
 
@@ -20,11 +21,17 @@ struct Report {
     /// The iterative path's preconditioner as set up.
     preconditioner: Option<PreconditionerKind>,
     amg: Option<AmgRecord>,
+    laws: LawConstants,
+    uniqueness: Option<Uniqueness>,
 }
 
 impl Report {
-    fn new(solver: &StepSolver) -> Self {
+    fn new(problem: &Problem, solver: &StepSolver) -> Self {
+        let laws = problem.law_constants();
+        let uniqueness = (solver.compliance()).map(|c| Uniqueness::new(c, laws.m_tau, problem.time_step()));
         Report {
+            laws,
+            uniqueness,
             algorithm: solver.algorithm(),
             factor_nnz: solver.factor_nnz(),
             linear: solver.linear(),
@@ -74,7 +81,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             params,
             plan,
             levels,
-            report: Report::new(levels.first()),
+            report: Report::new(problem, levels.first()),
             solves_before: tally.solves,
             sweeps_before: tally.sweeps,
             tally,
@@ -170,6 +177,36 @@ impl<'a, 'p> Recorder<'a, 'p> {
     }
 
     /// The run's summary as it stands.
+    /// The laws' constants, what they fail, and the uniqueness condition: the run header's
+    /// lines before the first step.
+    pub fn header_lines(&self) -> Vec<String> {
+        let laws = &self.report.laws;
+        let mut lines: Vec<String> = (laws.friction.iter())
+            .map(|f| {
+                let parts = if f.parts.is_empty() {
+                    "every contact part".to_string()
+                } else {
+                    f.parts.join(", ")
+                };
+                format!(
+                    "friction {} on {parts}: c_τ = {:.4e}, m_τ = {:.4e}",
+                    f.law, f.c_tau, f.m_tau
+                )
+            })
+            .collect();
+        lines.push(format!(
+            "heat exchange {}: m_θ = {:.4e}; frictional heating: L_τ = {:.4e}",
+            laws.heat_exchange, laws.m_theta, laws.l_tau
+        ));
+        lines.extend(laws.warnings.iter().map(|w| format!("warning: {w}")));
+        lines.push(match &self.report.uniqueness {
+            Some(u) => u.line(),
+            None => "uniqueness: not computed (the iterative path's fast solver never forms the contact compliance)"
+                .to_string(),
+        });
+        lines
+    }
+
     pub fn summary(&self, status: RunStatus, failure: Option<FailureRecord>) -> Summary {
         let (problem, tally, report) = (self.problem, &self.tally, &self.report);
         Summary {
@@ -184,6 +221,8 @@ impl<'a, 'p> Recorder<'a, 'p> {
             time_step: problem.time_step(),
             solver: self.params.kind.name().to_string(),
             algorithm: report.algorithm.to_string(),
+            laws: report.laws.clone(),
+            uniqueness: report.uniqueness,
             slip_tolerance: self.plan.slip_tolerance,
             convexification_iterations: tally.convexification_iterations,
             inner_iterations: tally.inner_iterations,

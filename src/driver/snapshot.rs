@@ -43,16 +43,21 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
 
 /// Header of the contact CSV files: position, outward normal ν, (3D: the first tangent t₁; in
 /// 2D t = ν turned by +90°), w_τ and ξ in the node's tangent coordinates, the friction bound,
-/// slip (1) or stick (0), θ.
-pub fn contact_csv_header(dim: usize) -> Vec<&'static str> {
-    if dim == 2 {
+/// slip (1) or stick (0), θ; and the slip distance s where a law weakens with it
+/// (`slip_distance`).
+pub fn contact_csv_header(dim: usize, slip_distance: bool) -> Vec<&'static str> {
+    let mut header = if dim == 2 {
         vec!["x", "y", "nu_x", "nu_y", "w_tau", "xi", "bound", "slip", "theta"]
     } else {
         vec![
             "x", "y", "z", "nu_x", "nu_y", "nu_z", "t1_x", "t1_y", "t1_z", "w_tau1", "w_tau2", "xi1", "xi2", "bound",
             "slip", "theta",
         ]
+    };
+    if slip_distance {
+        header.push("slip_distance");
     }
+    header
 }
 
 /// The contact CSV rows, in the columns of [`contact_csv_header`].
@@ -67,6 +72,7 @@ pub fn contact_csv_rows(dim: usize, rows: &[ContactRow]) -> Vec<Vec<f64>> {
             v.extend_from_slice(&r.w_tau);
             v.extend_from_slice(&r.xi);
             v.extend([r.bound, if r.slip { 1.0 } else { 0.0 }, r.theta]);
+            v.extend(r.slip_distance);
             v
         })
         .collect()
@@ -83,13 +89,18 @@ pub(super) fn write_snapshot(
     let d = problem.dim();
     if plan.csv {
         let path = dir.join(format!("contact{}csv", frame_tag(state.n)));
-        output::write_csv(&path, &contact_csv_header(d), &contact_csv_rows(d, &record.contact))?;
+        let header = contact_csv_header(d, problem.uses_slip_distance());
+        output::write_csv(&path, &header, &contact_csv_rows(d, &record.contact))?;
     }
     if plan.vtk {
         let file = format!("solution{}vtu", frame_tag(state.n));
         let stress = fields::cell_stress(problem, state);
         let von_mises = fields::von_mises(&stress);
         let (status, friction) = fields::nodal_contact_fields(problem, &record.contact);
+        let mut slip_distance = vec![0.0; problem.mesh.n_nodes()];
+        for row in &record.contact {
+            slip_distance[row.node] = row.slip_distance.unwrap_or(0.0);
+        }
         let grid = Grid {
             dim: d,
             points: &problem.mesh.coords,
@@ -121,7 +132,14 @@ pub(super) fn write_snapshot(
                 n_components: d,
                 values: &friction,
             },
+            Field {
+                name: "slip_distance",
+                n_components: 1,
+                values: &slip_distance,
+            },
         ];
+        // The slip distance only where a law weakens with it (the files stay as they were).
+        let point_fields = &point_fields[..point_fields.len() - usize::from(!problem.uses_slip_distance())];
         let cell_fields = [
             Field {
                 name: "stress",
@@ -139,7 +157,7 @@ pub(super) fn write_snapshot(
         } else {
             Compression::None
         };
-        output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields, compression)?;
+        output::write_vtu(&dir.join(&file), &grid, point_fields, &cell_fields, compression)?;
         pvd.push(PvdEntry { time: record.t, file });
     }
     Ok(())

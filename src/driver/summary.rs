@@ -85,6 +85,12 @@ pub struct Summary {
     /// `newton-krylov` on the iterative one.
     #[serde(default)]
     pub algorithm: String,
+    /// The constants of the laws' hypotheses (c_τ, m_τ, m_θ, L_τ; MODEL.md §6).
+    pub laws: crate::model::LawConstants,
+    /// The sufficient condition for every step to have a unique solution, where the solver
+    /// has the contact compliance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uniqueness: Option<Uniqueness>,
     pub slip_tolerance: f64,
     pub convexification_iterations: usize,
     pub inner_iterations: usize,
@@ -141,6 +147,56 @@ pub struct Summary {
     pub failure: Option<FailureRecord>,
     pub timings: Timings,
     pub outputs: Vec<OutputRecord>,
+}
+
+/// The step's sufficient condition for a unique solution (MODEL.md §6): for frozen θ the
+/// step minimizes ½ wᵀ S w − bᵀ w + Σ ℓ_i j_τ(w_i) on Γ_C (S the step condensed onto the
+/// tangential unknowns), strictly convex where S − m_τ diag(ℓ) is positive definite, that is
+/// where m_τ λ_max(C) < 1 for the weighted compliance C = S⁻¹ diag(ℓ).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Uniqueness {
+    /// λ_max(C) at the run's k.
+    pub compliance: f64,
+    /// max m_τ of the laws.
+    pub m_tau: f64,
+    /// m_τ λ_max(C): below 1, every step has one solution.
+    pub product: f64,
+    pub unique: bool,
+    /// k at which the product reaches 1, where C scales like k (the mass term dominates the
+    /// step matrix, as for the paper's k): an estimate of the largest k with unique steps.
+    /// `None` where m_τ = 0 (convex laws: unique for every k).
+    pub time_step_limit: Option<f64>,
+}
+
+impl Uniqueness {
+    /// The condition for the compliance λ_max(C) at step k and the laws' m_τ.
+    pub fn new(compliance: f64, m_tau: f64, time_step: f64) -> Self {
+        let product = m_tau * compliance;
+        Uniqueness {
+            compliance,
+            m_tau,
+            product,
+            unique: product < 1.0,
+            time_step_limit: (product > 0.0).then(|| time_step / product),
+        }
+    }
+
+    /// One line for the run header.
+    pub fn line(&self) -> String {
+        let verdict = if self.unique {
+            "< 1: every step has a unique solution"
+        } else {
+            "≥ 1: a step may have several solutions (the solvers return one that satisfies the law)"
+        };
+        let limit = match self.time_step_limit {
+            Some(k) => format!("; the condition holds for k below about {k:.3e} (mass-dominated estimate)"),
+            None => String::new(),
+        };
+        format!(
+            "uniqueness: m_τ λ_max(C) = {:.4e} × {:.4e} = {:.3} {verdict}{limit}",
+            self.m_tau, self.compliance, self.product
+        )
+    }
 }
 
 /// How a run ended.

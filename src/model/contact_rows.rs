@@ -46,6 +46,10 @@ pub struct ContactRow {
     pub slip: bool,
     /// θ at the node.
     pub theta: f64,
+    /// s_n, the slip distance so far, where a friction law weakens with it (`None` otherwise,
+    /// and the outputs leave the column out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip_distance: Option<f64>,
 }
 
 impl ContactRow {
@@ -79,6 +83,7 @@ fn combine(tangents: &[[f64; 3]], coordinates: &[f64]) -> [f64; 3] {
 pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Vec<ContactRow> {
     let tangential = problem.dim() - 1;
     let laws = ContactLaws::of_state(problem, state);
+    let uses_slip_distance = problem.uses_slip_distance();
     let w_tau = contact_tangential(problem, &state.w);
     problem
         .contact
@@ -98,6 +103,7 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
                 bound: laws.as_ref().map_or(f64::NAN, |laws| laws.bound(i, speed)),
                 slip: speed > slip_tolerance,
                 theta: state.theta[node.node],
+                slip_distance: uses_slip_distance.then(|| state.slip_distance.get(i).copied().unwrap_or(0.0)),
             }
         })
         .collect()

@@ -209,3 +209,105 @@ impl<'p> ContactLaws<'p> {
             .collect()
     }
 }
+
+/// The constants of the theory's hypotheses for the laws of a problem (MODEL.md §6): what the
+/// run header prints and `summary.json` records.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize, PartialEq)]
+pub struct LawConstants {
+    /// One entry per friction law, in the order given.
+    pub friction: Vec<FrictionConstants>,
+    /// max c_τ and max m_τ over the laws.
+    pub c_tau: f64,
+    pub m_tau: f64,
+    /// The heat exchange's name and m_θ = sup |(∂j)′| (H(j)(d)).
+    pub heat_exchange: String,
+    pub m_theta: f64,
+    /// L_τ = sup_{r, t} |∂h_τ/∂r| (H(h_τ)(b)), share included.
+    pub l_tau: f64,
+    /// Hypotheses the laws fail, each said in a sentence (computable, so the run goes on).
+    pub warnings: Vec<String>,
+}
+
+/// The constants of one friction law.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize, PartialEq)]
+pub struct FrictionConstants {
+    /// The law's name (`velocity-weakening`, `tresca`, `table`, `expression`,
+    /// `slip-distance-weakening`).
+    pub law: String,
+    /// The contact parts it holds on (empty: all not given their own).
+    pub parts: Vec<String>,
+    /// c_τ = sup b (H(j_τ)(c)).
+    pub c_tau: f64,
+    /// m_τ = sup max(0, −b′) (H(j_τ)(d)).
+    pub m_tau: f64,
+}
+
+impl Problem {
+    /// c_τ, m_τ, m_θ and L_τ of the problem's laws: each over the contact nodes of its parts
+    /// and the times 0, T/4, …, T (the scale and an expression may depend on x and t), the
+    /// slip rates by [`FrictionLaw::constants`].
+    pub fn law_constants(&self) -> LawConstants {
+        let final_time = self.time.final_time;
+        let times: Vec<f64> = (0..=4).map(|k| final_time * k as f64 / 4.0).collect();
+        let mut out = LawConstants {
+            heat_exchange: self.exchange.name().to_string(),
+            ..Default::default()
+        };
+        for (k, friction) in self.friction.iter().enumerate() {
+            let (mut c_tau, mut m_tau) = (0.0f64, 0.0f64);
+            let mut uniform: Option<(f64, f64)> = None;
+            for (i, node) in self.contact.iter().enumerate() {
+                if self.friction_of_node[i] != k {
+                    continue;
+                }
+                for &t in &times {
+                    let at = LawPoint {
+                        x: self.mesh.coords[node.node],
+                        t,
+                        slip_distance: 0.0,
+                    };
+                    let mut s = [0.0];
+                    friction.scale.eval(at.x, t, &mut s);
+                    let (c, m) = match uniform {
+                        Some(cm) => cm,
+                        None => {
+                            let cm = friction.law.constants(&at);
+                            if friction.law.uniform() {
+                                uniform = Some(cm);
+                            }
+                            cm
+                        }
+                    };
+                    c_tau = c_tau.max(s[0] * c);
+                    m_tau = m_tau.max(s[0] * m);
+                }
+            }
+            if !c_tau.is_finite() || c_tau > 1e12 {
+                out.warnings.push(format!(
+                    "friction law {} ({}): the bound grows without limit over the slip rates sampled (c_τ = {c_tau:e}): H(j_τ)(c), a bounded subgradient, fails",
+                    k + 1,
+                    friction.law.name()
+                ));
+            }
+            out.friction.push(FrictionConstants {
+                law: friction.law.name().to_string(),
+                parts: self.part_names(&friction.parts).into_iter().map(String::from).collect(),
+                c_tau,
+                m_tau,
+            });
+            out.c_tau = out.c_tau.max(c_tau);
+            out.m_tau = out.m_tau.max(m_tau);
+        }
+        let first = self.contact.first().map_or([0.0; 3], |n| self.mesh.coords[n.node]);
+        for &t in &times {
+            let at = LawPoint {
+                x: first,
+                t,
+                slip_distance: 0.0,
+            };
+            out.m_theta = out.m_theta.max(self.exchange.lipschitz(&at));
+            out.l_tau = out.l_tau.max(self.heating.share * self.heating.law.lipschitz(&at));
+        }
+        out
+    }
+}

@@ -22,7 +22,7 @@ mod step_matrix;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
-pub use laws::{ContactLaws, Friction, Heating};
+pub use laws::{ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{

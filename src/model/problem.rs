@@ -614,6 +614,11 @@ impl Problem {
         friction.law.bound(scale[0], &at, r)
     }
 
+    /// Whether a friction law weakens with the slip distance (then the outputs carry it).
+    pub fn uses_slip_distance(&self) -> bool {
+        self.friction.iter().any(|f| f.law.uses_slip_distance())
+    }
+
     /// |Γ_C| by the nodal weights.
     pub fn contact_measure(&self) -> f64 {
         self.contact_weights.iter().sum()

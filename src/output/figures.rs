@@ -1074,6 +1074,7 @@ mod tests {
                     bound: 1.0,
                     slip: false,
                     theta: 0.0,
+                    slip_distance: None,
                 }
             })
             .collect()

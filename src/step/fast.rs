@@ -45,6 +45,11 @@ pub struct FastSolver<'a> {
 }
 
 impl<'a> FastSolver<'a> {
+    /// λ_max(C) of the contact compliance ([`PaperSolver::compliance`]).
+    pub fn system_compliance(&self) -> f64 {
+        self.paper.compliance()
+    }
+
     /// The problem and ε_conv.
     pub(super) fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
         (self.problem, self.paper_params.tolerance)

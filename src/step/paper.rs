@@ -49,6 +49,8 @@ pub struct PaperSolver<'a> {
     params: PaperParams,
     /// Augmentation (Uzawa step) parameter r.
     pub augmentation: f64,
+    /// λ_max of the contact compliance C.
+    compliance: f64,
 }
 
 impl<'a> PaperSolver<'a> {
@@ -68,7 +70,15 @@ impl<'a> PaperSolver<'a> {
             condensation,
             params,
             augmentation,
+            compliance: lambda_max,
         })
+    }
+
+    /// λ_max(C), the largest eigenvalue of the contact compliance (the step condensed onto the
+    /// tangential unknowns of Γ_C, weighted by ℓ): the step has a unique solution where
+    /// m_τ λ_max(C) < 1 (MODEL.md §6).
+    pub fn compliance(&self) -> f64 {
+        self.compliance
     }
 
     /// The factored step matrix (of step size k).

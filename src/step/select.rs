@@ -167,6 +167,18 @@ impl<'a> StepSolver<'a> {
         }))
     }
 
+    /// λ_max(C) of the contact compliance where the solver has it: the direct path's
+    /// condensation, or the iterative `paper` solver's estimate (1/its augmentation); `None`
+    /// for `newton-krylov`, which never forms C (an estimate would cost ~20 Krylov solves).
+    pub fn compliance(&self) -> Option<f64> {
+        match self {
+            StepSolver::Paper(solver) => Some(solver.compliance()),
+            StepSolver::Fast(solver) => Some(solver.system_compliance()),
+            StepSolver::PaperKrylov(solver) => Some(1.0 / solver.augmentation),
+            StepSolver::NewtonKrylov(_) => None,
+        }
+    }
+
     /// The problem and ε_conv.
     fn problem_and_tolerance(&self) -> (&'a Problem, f64) {
         match self {
