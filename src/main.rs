@@ -485,7 +485,9 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
 }
 
 fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usize) -> anyhow::Result<()> {
-    use thermocontact::studies::bench::{format_table, loglog_slope, measure, write_results};
+    use thermocontact::studies::bench::{
+        format_table, loglog_slope, measure, measure_with, user_law_variants, write_results,
+    };
     let exe = std::env::current_exe()?;
     std::fs::create_dir_all(out)?;
     println!("reference discretization of the paper: nx = 256, ny = 64, k = 1/{steps}");
@@ -493,6 +495,20 @@ fn bench(out: &std::path::Path, sizes: &[usize], steps: usize, paper_up_to: usiz
     for solver in ["fast", "paper"] {
         let row = measure(&exe, out, solver, 256, steps)?;
         println!("{solver:>6}: {:.3} s wall", row.total);
+        rows.push(row);
+    }
+    // The user's laws on the reference run: the friction law as an expression and as a table
+    // (target: within 15 % of the built-in law), and a nonmonotone heat exchange.
+    for (label, overrides) in user_law_variants(out)? {
+        let row = measure_with(&exe, out, label, "fast", 256, steps, &overrides)?;
+        let against = rows[0].total;
+        println!(
+            "{label:>22}: {:.3} s wall ({:+.0} % against the built-in law), {} heat-exchange iterates ({:.2} per step)",
+            row.total,
+            100.0 * (row.total / against - 1.0),
+            row.exchange_iterations,
+            row.exchange_iterations as f64 / steps as f64
+        );
         rows.push(row);
     }
     println!("\n{}", format_table(&rows));

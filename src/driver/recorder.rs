@@ -228,6 +228,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             inner_iterations: tally.inner_iterations,
             max_convexification_per_step: tally.max_convexification_per_step,
             newton_iterations: tally.newton_iterations,
+            exchange_iterations: tally.exchange_iterations,
             fallback_steps: tally.fallback_steps,
             descent_steps: tally.descent_steps,
             descent_sweeps: tally.descent_sweeps,

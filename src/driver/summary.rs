@@ -126,6 +126,10 @@ pub struct Summary {
     pub amg: Option<AmgRecord>,
     /// Krylov iterations over all linear solves (iterative path; 0 on the direct path).
     pub krylov_iterations: usize,
+    /// Iterates of the fixed point on a nonlinear heat exchange over all steps (0 where ∂j is
+    /// affine: in the step matrix).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub exchange_iterations: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
     pub peak_memory_mib: Option<f64>,
     /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
@@ -197,6 +201,10 @@ impl Uniqueness {
             self.m_tau, self.compliance, self.product
         )
     }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// How a run ended.
@@ -392,6 +400,9 @@ pub struct Tally {
     pub descent_sweeps: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
+    /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
+    #[serde(default)]
+    pub exchange_iterations: usize,
     /// Full solves with the step matrix in the time loop, over every part of the run (a
     /// continued run adds its own to those of its checkpoint; 0 in checkpoints from before
     /// they were kept).
@@ -427,6 +438,7 @@ impl Tally {
         self.descent_steps += usize::from(info.descent_sweeps > 0);
         self.descent_sweeps += info.descent_sweeps;
         self.krylov_iterations += info.krylov_iterations;
+        self.exchange_iterations += info.exchange_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);
         self.steps.push(record);
     }

@@ -40,16 +40,66 @@ pub struct BenchRow {
     /// Steps cut back into substeps.
     #[serde(default)]
     pub cutback_steps: usize,
+    /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
+    #[serde(default)]
+    pub exchange_iterations: usize,
     pub peak_memory_mib: Option<f64>,
+}
+
+/// The reference run with the user's laws ([`measure_with`]): the paper's friction law as an
+/// expression and as a table (8001 points, in `work`), and a nonmonotone heat exchange.
+pub fn user_law_variants(work: &Path) -> anyhow::Result<Vec<(&'static str, Vec<String>)>> {
+    std::fs::create_dir_all(work)?;
+    let table = work.join("paper_mu.csv");
+    let mut text = String::from("slip_rate,coefficient\n");
+    for k in 0..=8000 {
+        let r = 0.4 * k as f64 / 8000.0;
+        text += &format!("{r:e},{:e}\n", 0.8 * (-100.0 * r).exp() + 0.2);
+    }
+    std::fs::write(&table, text)?;
+    Ok(vec![
+        (
+            "fast+expression",
+            vec!["friction={law=\"expression\", bound=150.0, coefficient=\"0.8*exp(-100*r) + 0.2\"}".to_string()],
+        ),
+        (
+            "fast+table",
+            vec![format!(
+                "friction={{law=\"table\", bound=150.0, file=\"{}\"}}",
+                table.display()
+            )],
+        ),
+        (
+            "fast+nonmonotone-heat",
+            vec!["heat_exchange={law=\"expression\", flux=\"2*theta - 60*sin(theta/20)\"}".to_string()],
+        ),
+    ])
 }
 
 /// Runs `thermocontact run` on one configuration in a child process and reads its summary. The
 /// run's folder belongs to the bench: a configuration measured again (the reference run is
 /// also a row of the scaling table, and a bench may be repeated) replaces its earlier run.
 pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -> anyhow::Result<BenchRow> {
+    measure_with(exe, work, solver, solver, nx, steps, &[])
+}
+
+/// [`measure`] with `--set` overrides, the row labelled `label`.
+pub fn measure_with(
+    exe: &Path,
+    work: &Path,
+    label: &str,
+    solver: &str,
+    nx: usize,
+    steps: usize,
+    overrides: &[String],
+) -> anyhow::Result<BenchRow> {
     let ny = (nx / 4).max(1);
-    let dir = work.join(format!("{solver}-{nx}x{ny}-{steps}"));
-    let status = Command::new(exe)
+    let dir = work.join(format!("{label}-{nx}x{ny}-{steps}"));
+    let mut command = Command::new(exe);
+    for set in overrides {
+        command.args(["--set", set]);
+    }
+    let status = command
         .args(["run", "--quiet", "--overwrite", "--out"])
         .arg(&dir)
         .args(["--set", &format!("mesh.nx={nx}"), "--set", &format!("mesh.ny={ny}")])
@@ -75,7 +125,7 @@ pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -
     let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
     let int = |v: &serde_json::Value| v.as_u64().unwrap_or(0) as usize;
     Ok(BenchRow {
-        solver: solver.to_string(),
+        solver: label.to_string(),
         nx,
         ny,
         steps,
@@ -95,6 +145,7 @@ pub fn measure(exe: &Path, work: &Path, solver: &str, nx: usize, steps: usize) -
         inner_iterations: int(&summary["inner_iterations"]),
         newton_iterations: int(&summary["newton_iterations"]),
         cutback_steps: summary["cutbacks"].as_array().map_or(0, Vec::len),
+        exchange_iterations: int(&summary["exchange_iterations"]),
         peak_memory_mib: summary["peak_memory_mib"].as_f64(),
     })
 }
@@ -293,7 +344,7 @@ pub fn format_hard_table(rows: &[HardRow]) -> String {
 /// The table header and one line per row.
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut out = format!(
-        "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8} {:>9}\n",
+        "{:<21} {:>5} {:>8} {:>9} {:>10} {:>8} {:>8} {:>8} {:>9} {:>8} {:>8} {:>8} {:>7} {:>7} {:>8} {:>9}\n",
         "solver",
         "nx",
         "nodes",
@@ -313,7 +364,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<6} {:>5} {:>8} {:>9} {:>10} {:>8.3} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3} {:>7} {:>7} {:>8} {:>9}\n",
+            "{:<21} {:>5} {:>8} {:>9} {:>10} {:>8.3} {:>8.3} {:>8.3} {:>9.3} {:>8.3} {:>8.3} {:>8.3} {:>7} {:>7} {:>8} {:>9}\n",
             r.solver,
             r.nx,
             r.nodes,
