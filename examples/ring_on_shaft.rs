@@ -2,7 +2,7 @@
 //!
 //! What it solves: a thermo-viscoelastic ring a ≤ r ≤ b sits on a rigid shaft. Its inner circle
 //! Γ_C is in bilateral contact with the shaft (u_ν = 0, normals from the mesh, one per node)
-//! with slip-weakening friction μ(r) S and frictional heating; its outer circle Γ_N carries a
+//! with velocity-weakening friction μ(r) S and frictional heating; its outer circle Γ_N carries a
 //! shear traction τ(t) e_θ that grows linearly in time. Nothing clamps the ring (Γ_D = ∅):
 //! friction alone holds it, until the shear it must carry on the inner circle, τ b²/a² by the
 //! ring's equilibrium, reaches the friction bound μ(0) S. Then the whole inner circle slips at

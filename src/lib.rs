@@ -1,7 +1,7 @@
 //! # thermocontact
 //!
 //! Dynamic bilateral frictional contact of a thermo-viscoelastic body with a nonmonotone
-//! (slip-weakening) friction law, discretized as in Bartosz, Danan & Szafraniec, *Numerical
+//! (velocity-weakening) friction law, discretized as in Bartosz, Danan & Szafraniec, *Numerical
 //! analysis of a dynamic bilateral thermoviscoelastic contact problem with nonmonotone friction
 //! law*, Comput. Math. Appl. 73 (2017) 727–746.
 //!

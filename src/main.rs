@@ -22,7 +22,7 @@ use thermocontact::studies::reproduction::{self as repro, FigureOptions, Figures
 use thermocontact::studies::verification::{self, study::LevelRun};
 use thermocontact::Interruption;
 
-/// Dynamic frictional contact of thermo-viscoelastic bodies with nonmonotone (slip-weakening)
+/// Dynamic frictional contact of thermo-viscoelastic bodies with nonmonotone (velocity-weakening)
 /// friction: the P1 / backward-Euler scheme of Bartosz, Danan & Szafraniec, Comput. Math. Appl.
 /// 73 (2017) 727–746.
 #[derive(Parser)]
@@ -101,7 +101,7 @@ enum Command {
         /// Also run the paper's solver in the scaling table up to this nx.
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
-        /// Run the hard suite instead: long runs, a coarse k, steep slip weakening (α = 1000,
+        /// Run the hard suite instead: long runs, a coarse k, steep velocity weakening (α = 1000,
         /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 1.5 minutes, most of it the
         /// 3D case). Prints for each case whether it completed, its cutbacks, the steps the
         /// descent finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
@@ -772,6 +772,17 @@ fn print_summary(s: &Summary) {
             "{:<34} {:>12}",
             "steps finished by descent (sweeps)",
             format!("{} ({})", s.descent_steps, s.descent_sweeps)
+        );
+    }
+    if s.exchange_iterations > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "heat-exchange iterates (per step)",
+            format!(
+                "{} ({:.2})",
+                s.exchange_iterations,
+                s.exchange_iterations as f64 / s.steps as f64
+            )
         );
     }
     let deepest = s.cutbacks.iter().map(|c| c.depth).max().unwrap_or(0);

@@ -156,7 +156,7 @@ struct RingRun {
 /// inertia negligible, d/dr (r² σ_rθ) = 0, so the inner circle carries σ_rθ(a) = τ b²/a²,
 /// whatever the material. The bound there is μ(0) S = g, so the ring slips when
 /// τ b²/a² = g: at t* = g a²/(τ̇ b²). Conditions: a = 1, b = 2 m, the paper's material without
-/// thermal expansion and with ρ = 1 (quasi-static), slip weakening μ(0) S = 106 N/m,
+/// thermal expansion and with ρ = 1 (quasi-static), velocity weakening μ(0) S = 106 N/m,
 /// τ̇ = 40 N/(m s), so t* = 0.6625 s
 /// (k = 1/40: the first step past t* is n = 27).
 fn ring_on_shaft(n_radial: usize, n_around: usize) -> RingRun {

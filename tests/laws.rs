@@ -388,3 +388,41 @@ fn bad_laws_are_refused_by_key() {
         "{e}"
     );
 }
+
+/// The showcases: a table on one contact part, an expression on another and a nonmonotone
+/// heat exchange, in 2D and 3D; the direct and the iterative paths agree.
+#[test]
+fn the_own_laws_showcases_run_on_both_paths_in_2d_and_3d() {
+    for (file, sizes) in [
+        (
+            "scenarios/own_laws.toml",
+            &["mesh.nx=16", "mesh.ny=4", "time.steps=16"][..],
+        ),
+        (
+            "scenarios/own_laws3d.toml",
+            &["mesh.nx=8", "mesh.ny=2", "mesh.nz=2", "time.steps=8"][..],
+        ),
+    ] {
+        let states: Vec<State> = ["direct", "iterative"]
+            .iter()
+            .map(|linear| {
+                let mut overrides: Vec<String> = sizes.iter().map(|s| s.to_string()).collect();
+                overrides.push(format!("solver.linear={linear}"));
+                let scenario = Scenario::load_file(Path::new(file), &overrides).unwrap();
+                let problem = scenario.build().unwrap();
+                let (summary, state) =
+                    driver::run_quiet(&problem, &scenario.solver_params(), &OutputPlan::default()).unwrap();
+                assert!(
+                    summary.exchange_iterations >= state.n,
+                    "{file}: the heat exchange iterates"
+                );
+                assert_eq!(summary.laws.friction.len(), 2);
+                state
+            })
+            .collect();
+        let d = relative_difference(&states[0].u, &states[1].u);
+        assert!(d < 1e-6, "{file}: the paths differ by {d:e} in u");
+        let d = relative_difference(&states[0].theta, &states[1].theta);
+        assert!(d < 1e-6, "{file}: the paths differ by {d:e} in θ");
+    }
+}

@@ -1,7 +1,7 @@
 //! The iterative path (`solver.linear = "iterative"`: Newton–Krylov on all unknowns, nothing
 //! condensed) reaches the direct path's solution: the same fields to a small multiple of the
 //! solvers' tolerance ε_conv = 1e-6 and the same stick/slip state at every node, in 2D and 3D,
-//! with the slip-weakening law (non-unique regime: both follow the convexification loop from the
+//! with the velocity-weakening law (non-unique regime: both follow the convexification loop from the
 //! previous step) and with Tresca's law (unique solution).
 
 use thermocontact::driver::Summary;
@@ -98,7 +98,7 @@ fn iterative_path_matches_the_direct_path_with_tresca_friction() {
 }
 
 /// With the AMG coarse correction (`solver.preconditioner = "amg"`, feature `petsc`) the
-/// iterative path reaches the same solution, 3D with slip weakening and with symmetry planes
+/// iterative path reaches the same solution, 3D with velocity weakening and with symmetry planes
 /// (contact nodes with a held tangential coordinate: padded slots in the AMG's blocks), at
 /// k = 1/16 and 1/8.
 #[cfg(feature = "petsc")]

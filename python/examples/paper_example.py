@@ -2,7 +2,7 @@
 
 What it solves: the built-in default scenario, Bartosz, Danan & Szafraniec (2017), Section 6 — a
 40 m × 10 m viscoelastic plate clamped on the left, pressed by a traction (0, −800 t) N/m on the
-top, in bilateral contact with slip-weakening friction and frictional heating on the bottom
+top, in bilateral contact with velocity-weakening friction and frictional heating on the bottom
 (Γ_C). It runs the scenario step by step (Simulation.steps()), counts the slipping contact nodes
 at every step, and draws that count against time with the paper's counts as crosses (Fig. 2:
 4 nodes at t = 0.25 s, 30 at t = 1 s).

@@ -22,7 +22,7 @@ mod values;
 
 use pyo3::prelude::*;
 
-/// Dynamic frictional contact of thermo-viscoelastic bodies with slip-weakening friction (the
+/// Dynamic frictional contact of thermo-viscoelastic bodies with velocity-weakening friction (the
 /// scheme of Bartosz, Danan & Szafraniec, Comput. Math. Appl. 73 (2017) 727–746), in Rust.
 #[pymodule]
 mod _thermocontact {

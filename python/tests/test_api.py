@@ -14,8 +14,8 @@ from conftest import COARSE, REPOSITORY
 
 
 def test_keys_by_dotted_path_read_and_write_the_toml(coarse):
-    assert coarse["mesh.nx"] == 16 and coarse["friction.law"] == "slip-weakening"
-    assert coarse["friction"] == {"law": "slip-weakening", "bound": 150.0, "a": 1.0, "b": 0.2, "alpha": 100.0}
+    assert coarse["mesh.nx"] == 16 and coarse["friction.law"] == "velocity-weakening"
+    assert coarse["friction"] == {"law": "velocity-weakening", "bound": 150.0, "a": 1.0, "b": 0.2, "alpha": 100.0}
     coarse["material.thermal_expansion"] = 1e-4
     coarse["output.times"] = np.array([0.5, 1.0])  # NumPy values are taken as lists and numbers
     coarse["mesh.ny"] = np.int64(2)
@@ -23,9 +23,9 @@ def test_keys_by_dotted_path_read_and_write_the_toml(coarse):
     assert coarse.output_steps == [8, 16]
     coarse["friction"] = {"law": "tresca", "bound": 100}  # a law's table set whole
     assert coarse["friction"] == {"law": "tresca", "bound": 100.0}
-    coarse.update({"friction.law": "slip-weakening", "friction.bound": 150, "friction.a": 1.0,
+    coarse.update({"friction.law": "velocity-weakening", "friction.bound": 150, "friction.a": 1.0,
                    "friction.b": 0.2, "friction.alpha": 100.0})  # or key by key, at once
-    assert coarse["friction.law"] == "slip-weakening"
+    assert coarse["friction.law"] == "velocity-weakening"
     assert "loads.traction" in coarse and coarse["loads.traction.0.part"] == "top"
     with pytest.raises(KeyError):
         coarse["mesh.nothing"]

@@ -1,4 +1,4 @@
-"""thermocontact: dynamic frictional contact of thermo-viscoelastic bodies with slip-weakening
+"""thermocontact: dynamic frictional contact of thermo-viscoelastic bodies with velocity-weakening
 friction, the finite-element scheme of Bartosz, Danan & Szafraniec, Comput. Math. Appl. 73 (2017)
 727-746, computed in Rust, driven from Python with NumPy arrays in and out.
 

@@ -147,8 +147,8 @@ pub(super) fn heat_exchange(spec: &HeatExchangeSpec) -> Result<Box<dyn HeatExcha
     })
 }
 
-/// The two columns of a CSV file (slip rate, coefficient), one row per line; a first line that
-/// is not numbers is a header; `#` starts a comment.
+/// The two columns of a CSV file (slip rate, coefficient), one row per line; the first line
+/// that is not a comment may be a header; `#` starts a comment.
 fn read_table_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("a readable CSV file ({e})"))?;
     if !meta.is_file() || meta.len() > 16 << 20 {
@@ -156,6 +156,7 @@ fn read_table_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
     }
     let text = std::fs::read_to_string(path).map_err(|e| format!("a readable CSV file ({e})"))?;
     let (mut x, mut y) = (Vec::new(), Vec::new());
+    let mut header_seen = false;
     for (number, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
         if line.is_empty() {
@@ -168,7 +169,7 @@ fn read_table_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
                 x.push(v[0]);
                 y.push(v[1]);
             }
-            None if x.is_empty() && number == 0 => continue,
+            None if x.is_empty() && !header_seen => header_seen = true,
             _ => return Err(format!("two numbers per line (line {} reads `{line}`)", number + 1)),
         }
     }

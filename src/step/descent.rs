@@ -10,7 +10,7 @@
 //!
 //! where D = E_w A⁻¹ E_wᵀ is the velocity block of the inverse step matrix on Γ_C. D is
 //! symmetric positive definite even though A is not: it is the inverse of the Schur complement
-//! K_w + G K_θ⁻¹ Gᵀ restricted to Γ_C. E is coercive and, for a slip-weakening law, nonconvex:
+//! K_w + G K_θ⁻¹ Gᵀ restricted to Γ_C. E is coercive and, for a velocity-weakening law, nonconvex:
 //! a step may have several solutions (conditions (16)–(18) of the paper fail), but every local
 //! minimizer of E is one, and a descent method cannot cycle. At a stationary point
 //! ξ = ℓ⁻¹ K (w − w₀) is the friction stress and (E1) holds identically.

@@ -161,7 +161,7 @@ pub struct HardCase {
     pub overrides: Vec<&'static str>,
 }
 
-/// The hard suite: long runs, a coarse k, steep slip weakening (α up to 1000 s/m, b down to
+/// The hard suite: long runs, a coarse k, steep velocity weakening (α up to 1000 s/m, b down to
 /// 0.05), and the 3D example on a finer mesh at a coarse k.
 pub fn hard_cases() -> Vec<HardCase> {
     let case = |name, what, scenario, overrides: &[&'static str]| HardCase {
@@ -194,7 +194,7 @@ pub fn hard_cases() -> Vec<HardCase> {
         case("coarse-k", "default example with k = 1/8", None, &["time.steps=8"]),
         case(
             "alpha-1000",
-            "slip weakening α = 1000 s/m",
+            "velocity weakening α = 1000 s/m",
             None,
             &["friction.alpha=1000.0"],
         ),
