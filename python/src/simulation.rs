@@ -456,6 +456,9 @@ pub struct PyContact {
     slip: Py<PyArray1<bool>>,
     #[pyo3(get)]
     theta: Py<PyArray1<f64>>,
+    /// s, the slip distance so far, where a friction law weakens with it (`None` otherwise).
+    #[pyo3(get)]
+    slip_distance: Option<Py<PyArray1<f64>>>,
     dim: usize,
     rows: Vec<ContactRow>,
 }
@@ -483,6 +486,8 @@ impl PyContact {
             bound: column(&|r| r.bound),
             slip: PyArray1::from_vec(py, rows.iter().map(|r| r.slip).collect()).unbind(),
             theta: column(&|r| r.theta),
+            slip_distance: (rows.first().is_some_and(|r| r.slip_distance.is_some()))
+                .then(|| column(&|r| r.slip_distance.unwrap_or(0.0))),
             dim,
             rows,
         }

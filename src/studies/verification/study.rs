@@ -288,8 +288,18 @@ pub fn self_convergence(
 
 /// The manufactured-solution study: every level 1…N against the exact solution.
 pub fn manufactured(n_levels: usize, progress: &mut dyn FnMut(&LevelRun)) -> Result<StudyReport, Error> {
+    manufactured_with(n_levels, &[], progress)
+}
+
+/// [`manufactured`] with `key=value` overrides of the family's scenario (another law of the
+/// same family: the exact solution's loads take the laws from the problem).
+pub fn manufactured_with(
+    n_levels: usize,
+    overrides: &[String],
+    progress: &mut dyn FnMut(&LevelRun),
+) -> Result<StudyReport, Error> {
     let clock = Instant::now();
-    let base = Manufactured::scenario(&[])?;
+    let base = Manufactured::scenario(overrides)?;
     let specs = levels(&base, n_levels)?;
     let mut measured = Vec::with_capacity(specs.len());
     let mut solution_norms = ErrorNorms::default();
