@@ -96,10 +96,7 @@ pub fn measure_with(
     let ny = (nx / 4).max(1);
     let dir = work.join(format!("{label}-{nx}x{ny}-{steps}"));
     let mut command = Command::new(exe);
-    for set in overrides {
-        command.args(["--set", set]);
-    }
-    let status = command
+    command
         .args(["run", "--quiet", "--overwrite", "--out"])
         .arg(&dir)
         .args(["--set", &format!("mesh.nx={nx}"), "--set", &format!("mesh.ny={ny}")])
@@ -116,9 +113,11 @@ pub fn measure_with(
             "output.csv=false",
             "--set",
             "output.times=[1.0]",
-        ])
-        .stdout(std::process::Stdio::null())
-        .status()?;
+        ]);
+    for set in overrides {
+        command.args(["--set", set]);
+    }
+    let status = command.stdout(std::process::Stdio::null()).status()?;
     anyhow::ensure!(status.success(), "the {solver} run at nx = {nx} failed ({status})");
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("summary.json"))?)?;
     let t = &summary["timings"];
