@@ -324,6 +324,11 @@ fn the_reported_constants_and_the_uniqueness_condition() {
     assert_eq!(tresca.m_tau, 0.0);
     let unique = driver::Uniqueness::new(1.0, tresca.m_tau, 0.1);
     assert!(unique.unique && unique.time_step_limit.is_none());
+    assert!(constants.warnings.is_empty() && tresca.warnings.is_empty());
+    // Outside the theory but computable: a bound that grows without limit runs, with a warning.
+    let growing = coarse(&["friction={law=\"expression\", bound=1.0, coefficient=\"0.5 + r\"}"]);
+    let warnings = growing.build().unwrap().law_constants().warnings;
+    assert!(warnings.len() == 1 && warnings[0].contains("H(j_τ)(c)"), "{warnings:?}");
 
     let verdict = |steps: usize| {
         let scenario = coarse(&[&format!("time.steps={steps}")]);
@@ -425,4 +430,21 @@ fn the_own_laws_showcases_run_on_both_paths_in_2d_and_3d() {
         let d = relative_difference(&states[0].theta, &states[1].theta);
         assert!(d < 1e-6, "{file}: the paths differ by {d:e} in θ");
     }
+}
+
+/// A heat exchange given as a table and as an expression of the same ∂j = 2θ take the same
+/// path (nodal, iterated) and agree; against the built-in linear law (a Robin term with the
+/// consistent boundary mass) they differ by the quadrature only.
+#[test]
+fn a_tabulated_heat_exchange_agrees_with_its_expression_and_the_linear_law() {
+    let table = coarse(&["heat_exchange={law=\"table\", temperature=[-1000.0, 1000.0], flux=[-2000.0, 2000.0]}"]);
+    let expression = coarse(&["heat_exchange={law=\"expression\", flux=\"2*theta\"}"]);
+    let linear = coarse(&[]);
+    let (a, b, c) = (run(&table), run(&expression), run(&linear));
+    let d = relative_difference(&a.theta, &b.theta);
+    assert!(d < 1e-9, "table against expression: {d:e}");
+    let d = relative_difference(&a.u, &b.u);
+    assert!(d < 1e-9, "table against expression, u: {d:e}");
+    let d = relative_difference(&a.theta, &c.theta);
+    assert!(d < 1e-2, "nodal against consistent quadrature: {d:e}");
 }

@@ -104,10 +104,10 @@ impl<'p> ContactLaws<'p> {
         &self.points[i]
     }
 
-    /// b_i(r) at contact node i.
+    /// b_i(r) at contact node i (a law's negative value counts as 0: no friction).
     #[inline]
     pub fn bound(&self, i: usize, r: f64) -> f64 {
-        self.law(i).bound(self.scales[i], &self.points[i], r)
+        self.law(i).bound(self.scales[i], &self.points[i], r).max(0.0)
     }
 
     /// b_i′(r).
@@ -282,12 +282,32 @@ impl Problem {
                     m_tau = m_tau.max(s[0] * m);
                 }
             }
-            if !c_tau.is_finite() || c_tau > 1e12 {
-                out.warnings.push(format!(
-                    "friction law {} ({}): the bound grows without limit over the slip rates sampled (c_τ = {c_tau:e}): H(j_τ)(c), a bounded subgradient, fails",
-                    k + 1,
-                    friction.law.name()
-                ));
+            // H(j_τ)(c): a bounded subgradient. A bound still growing between r = 10³ and 10⁶
+            // (the laws' rates are far below) does not have one; a negative one is no bound.
+            if let Some(i) = (0..self.contact.len()).find(|&i| self.friction_of_node[i] == k) {
+                let at = LawPoint {
+                    x: self.mesh.coords[self.contact[i].node],
+                    t: final_time,
+                    slip_distance: 0.0,
+                };
+                let (far, farther) = (friction.law.bound(1.0, &at, 1e3), friction.law.bound(1.0, &at, 1e6));
+                if !farther.is_finite() || farther > 2.0 * far.abs() + 1e-300 {
+                    out.warnings.push(format!(
+                        "friction law {} ({}): μ grows without bound (μ(10³) = {far:e}, μ(10⁶) = {farther:e}), so H(j_τ)(c), a bounded subgradient, fails; the run goes on",
+                        k + 1,
+                        friction.law.name()
+                    ));
+                }
+                if let Some(r) = [0.0, 1e-3, 1e-2, 0.1, 1.0, 10.0, 1e3]
+                    .into_iter()
+                    .find(|&r| friction.law.bound(1.0, &at, r) < 0.0)
+                {
+                    out.warnings.push(format!(
+                        "friction law {} ({}): μ({r}) < 0, which no friction law has (the solvers take a negative bound as 0)",
+                        k + 1,
+                        friction.law.name()
+                    ));
+                }
             }
             out.friction.push(FrictionConstants {
                 law: friction.law.name().to_string(),
