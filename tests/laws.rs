@@ -343,6 +343,17 @@ fn the_reported_constants_and_the_uniqueness_condition() {
         )
     };
     let (fine, coarse_k) = (verdict(4096), verdict(16));
+    // The iterative path's fast solver estimates the same compliance (power iteration, 10⁻³).
+    let iterative = coarse(&["solver.linear=iterative"]);
+    let problem = iterative.build().unwrap();
+    let params = iterative.solver_params();
+    let linear = LinearSystem::new(&problem, problem.time_step(), &params).unwrap();
+    let estimate = StepSolver::new(&problem, linear, &params)
+        .unwrap()
+        .compliance()
+        .unwrap();
+    let exact = verdict(16).compliance;
+    assert!((estimate - exact).abs() <= 1e-2 * exact, "{estimate} against {exact}");
     assert!(fine.unique, "k = 1/4096: {}", fine.line());
     assert!(!coarse_k.unique, "k = 1/16: {}", coarse_k.line());
     // The compliance grows with k, and the estimated limit lies between the two.

@@ -40,19 +40,30 @@ pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 /// The largest eigenvalue in modulus of the n × n operator `apply` (y = C v), by power
 /// iteration from a fixed start, stopping when the estimate settles to 10⁻⁶ or after 200
 /// products.
-pub fn largest_eigenvalue<E>(n: usize, mut apply: impl FnMut(&[f64], &mut [f64]) -> Result<(), E>) -> Result<f64, E> {
+pub fn largest_eigenvalue<E>(n: usize, apply: impl FnMut(&[f64], &mut [f64]) -> Result<(), E>) -> Result<f64, E> {
+    largest_eigenvalue_within(n, 1e-6, 200, apply)
+}
+
+/// [`largest_eigenvalue`] stopping when the estimate settles to `tolerance` (relative) or after
+/// `max_products` products.
+pub fn largest_eigenvalue_within<E>(
+    n: usize,
+    tolerance: f64,
+    max_products: usize,
+    mut apply: impl FnMut(&[f64], &mut [f64]) -> Result<(), E>,
+) -> Result<f64, E> {
     if n == 0 {
         return Ok(0.0);
     }
     let mut v: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * (i % 7) as f64).collect();
     let mut y = vec![0.0; n];
     let mut estimate = 0.0;
-    for _ in 0..200 {
+    for _ in 0..max_products {
         let norm = dot(&v, &v).sqrt();
         v.iter_mut().for_each(|x| *x /= norm);
         apply(&v, &mut y)?;
         let new = dot(&y, &y).sqrt();
-        let settled = (new - estimate).abs() <= 1e-6 * new;
+        let settled = (new - estimate).abs() <= tolerance * new;
         estimate = new;
         std::mem::swap(&mut v, &mut y);
         if settled {

@@ -44,7 +44,7 @@ pub use newton::{CondensedStep, NewtonParams, NewtonResult};
 pub use newton_krylov::NewtonKrylov;
 pub use paper::{PaperParams, PaperSolver};
 pub use paper_krylov::PaperKrylov;
-pub use select::{LinearSystem, StepSolver};
+pub use select::{LinearSystem, StepSolver, COMPLIANCE_ESTIMATE_UP_TO, EXCHANGE_ITERATIONS};
 
 /// What stops a step for good (no cutback helps): the linear algebra or the model's data.
 #[derive(Debug, thiserror::Error)]

@@ -19,7 +19,7 @@ use super::iterative::{krylov_solve, tangential, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
 use super::StepError as Error;
 use super::{SolveError, StepInfo};
-use crate::la::vector::largest_eigenvalue;
+use crate::la::vector::largest_eigenvalue_within;
 use crate::la::{CsrMatrix, Ilu0};
 use crate::model::Problem;
 use crate::model::{ContactLaws, State};
@@ -175,12 +175,22 @@ impl LoadedStep for KrylovStep<'_> {
 /// one Krylov solve: A x = Σ_i ℓ_i v_i·t_i, then w_τ of x. A solve at its cap is the Krylov
 /// error it was.
 fn spectral_bound(problem: &Problem, sys: &KrylovSystem) -> Result<f64, Error> {
+    spectral_bound_within(problem, sys, 1e-6, 200)
+}
+
+/// [`spectral_bound`] to a relative `tolerance` within `max_products` Krylov solves.
+pub(super) fn spectral_bound_within(
+    problem: &Problem,
+    sys: &KrylovSystem,
+    tolerance: f64,
+    max_products: usize,
+) -> Result<f64, Error> {
     let td = problem.dim() - 1;
     let guard = sys.lock();
     let (a, ilu) = &*guard;
     let n = sys.order.len();
     let (mut rhs, mut x, mut residual) = (vec![0.0; n], vec![0.0; n], Vec::new());
-    largest_eigenvalue(problem.contact.len() * td, |v, y| {
+    largest_eigenvalue_within(problem.contact.len() * td, tolerance, max_products, |v, y| {
         rhs.fill(0.0);
         for (i, node) in sys.nodes.iter().enumerate() {
             for &(k, row) in &node.tangent {

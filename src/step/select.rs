@@ -25,6 +25,10 @@ use super::{
 use crate::model::norms::{contact_l2, heat_exchange_multiplier};
 use crate::model::{ContactLaws, Problem, State, StepMatrix};
 
+/// The largest problem (unknowns) for which the iterative path's fast solver estimates the
+/// contact compliance of the uniqueness report ([`StepSolver::compliance`]).
+pub const COMPLIANCE_ESTIMATE_UP_TO: usize = 200_000;
+
 /// Cap on the iterates of the fixed point on a nonlinear heat exchange per step
 /// ([`StepSolver::exchange_iteration`]).
 pub const EXCHANGE_ITERATIONS: usize = 50;
@@ -105,7 +109,7 @@ impl<'a> StepSolver<'a> {
 
     /// One step of the solver's step size, from `previous` to time `t`: the laws on Γ_C at t
     /// with the slip distances of `previous`, and where the heat exchange is nonlinear, the
-    /// fixed point on it ([`StepSolver::exchange_iteration`]).
+    /// fixed point on it (docs/laws.md, "Heat exchange").
     pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let (problem, _) = self.problem_and_tolerance();
         let laws = ContactLaws::new(problem, t, &previous.slip_distance).map_err(|e| SolveError::Other(e.into()))?;
@@ -167,15 +171,21 @@ impl<'a> StepSolver<'a> {
         }))
     }
 
-    /// λ_max(C) of the contact compliance where the solver has it: the direct path's
-    /// condensation, or the iterative `paper` solver's estimate (1/its augmentation); `None`
-    /// for `newton-krylov`, which never forms C (an estimate would cost ~20 Krylov solves).
+    /// λ_max(C) of the contact compliance: the direct path's condensation has it, the
+    /// iterative `paper` solver estimates it for its augmentation; for `newton-krylov`, which
+    /// never forms C, a power iteration of Krylov solves (to 10⁻³, at most 40) estimates it up
+    /// to [`COMPLIANCE_ESTIMATE_UP_TO`] unknowns, and beyond that it is `None` (minutes at 10⁶).
     pub fn compliance(&self) -> Option<f64> {
         match self {
             StepSolver::Paper(solver) => Some(solver.compliance()),
             StepSolver::Fast(solver) => Some(solver.system_compliance()),
             StepSolver::PaperKrylov(solver) => Some(1.0 / solver.augmentation),
-            StepSolver::NewtonKrylov(_) => None,
+            StepSolver::NewtonKrylov(solver) => {
+                let (problem, _) = solver.problem_and_tolerance();
+                (problem.n_unknowns() <= COMPLIANCE_ESTIMATE_UP_TO)
+                    .then(|| super::paper_krylov::spectral_bound_within(problem, solver.system(), 1e-3, 40).ok())
+                    .flatten()
+            }
         }
     }
 
