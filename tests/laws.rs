@@ -373,7 +373,7 @@ fn bad_laws_are_refused_by_key() {
     };
     refused(
         "friction={law=\"table\", bound=1.0, slip_rate=[0.0, 0.0], coefficient=[1.0, 0.5]}",
-        &["friction.coefficient", "increasing"],
+        &["friction.slip_rate", "increasing"],
     );
     refused(
         "friction={law=\"table\", bound=1.0, slip_rate=[0.0, 1.0], coefficient=[1.0, -0.5]}",
@@ -386,6 +386,10 @@ fn bad_laws_are_refused_by_key() {
     refused(
         "heat_exchange={law=\"expression\", flux=\"r*theta\"}",
         &["heat_exchange.flux", "`r`"],
+    );
+    refused(
+        "heat_exchange={law=\"table\", temperature=[0.0, 1.0], flux=[0.0, inf]}",
+        &["heat_exchange.flux", "finite"],
     );
     refused("frictional_heating.share=1.5", &["frictional_heating.share", "1.5"]);
     refused(

@@ -324,3 +324,28 @@ except KeyboardInterrupt:
     assert "KeyboardInterrupt" in out
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["status"] == "interrupted" and 0 < summary["failure"]["last_step"] < 100000
+
+
+# ---------------------------------------------------------------- the user's laws
+
+
+def test_own_laws_by_scenario_keys(coarse):
+    # One law per contact part (a list of tables), slip-distance weakening, a nonmonotone heat
+    # exchange: the same keys as the TOML, the slip distance in the contact table.
+    coarse["friction"] = [{"law": "slip-distance-weakening", "part": "bottom", "bound": 150.0,
+                           "static": 1.0, "dynamic": 0.2, "distance": 0.002}]
+    coarse["heat_exchange"] = {"law": "expression", "flux": "2*theta - 60*sin(theta/20)"}
+    coarse["frictional_heating.share"] = 0.5
+    result = tc.Simulation(coarse).run()
+    contact = result.last.contact
+    assert "slip_distance" in contact.columns
+    assert contact.slip_distance.shape == (len(contact),)
+    assert (contact.slip_distance >= 0).all() and contact.slip_distance.max() > 0
+    assert contact.table().shape == (len(contact), len(contact.columns))
+    assert result.summary["laws"]["friction"][0]["law"] == "slip-distance-weakening"
+    assert result.summary["exchange_iterations"] >= coarse["time.steps"]
+    # The paper's law has no slip-distance column.
+    assert tc.Simulation(tc.Scenario.default()).n_steps > 0
+    with pytest.raises(tc.ScenarioError) as error:
+        coarse["friction"] = {"law": "table", "bound": 1.0, "slip_rate": [0.0, 0.0], "coefficient": [1.0, 0.5]}
+    assert "friction.slip_rate" in str(error.value)

@@ -42,6 +42,18 @@ pub enum TableError {
     },
 }
 
+impl TableError {
+    /// The column the error is about (`None`: the two columns' lengths).
+    pub fn column(&self) -> Option<&'static str> {
+        match self {
+            TableError::Lengths { .. } => None,
+            TableError::NotFinite { column, .. }
+            | TableError::NotIncreasing { column, .. }
+            | TableError::Negative { column, .. } => Some(column),
+        }
+    }
+}
+
 impl Table {
     /// The table through (x_k, y_k); `names` are the two columns' names for errors.
     pub fn new(x: Vec<f64>, y: Vec<f64>, names: [&'static str; 2]) -> Result<Table, TableError> {

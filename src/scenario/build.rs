@@ -57,7 +57,13 @@ pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Datum, Box
             return Err(invalid(&format!("{key}.bound"), &values[0], "a non-negative bound S"));
         }
     }
-    let table_error = |column: &str, e: crate::contact::TableError| {
+    // The column's key (the file's, where the table came from one).
+    let table_error = |from_file: bool, e: crate::contact::TableError| {
+        let column = if from_file {
+            "file"
+        } else {
+            e.column().unwrap_or("coefficient")
+        };
         invalid(&format!("{key}.{column}"), &e.to_string(), "a valid table")
     };
     let law: Box<dyn FrictionLaw> = match spec {
@@ -90,7 +96,7 @@ pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Datum, Box
             };
             let table = crate::contact::Table::new(rates, mu, ["slip_rate", "coefficient"])
                 .and_then(|t| t.non_negative("coefficient"))
-                .map_err(|e| table_error("coefficient", e))?;
+                .map_err(|e| table_error(file.is_some(), e))?;
             Box::new(TabulatedFriction { table })
         }
         FrictionSpec::Expression { coefficient, .. } => {
@@ -129,11 +135,8 @@ pub(super) fn heat_exchange(spec: &HeatExchangeSpec) -> Result<Box<dyn HeatExcha
         HeatExchangeSpec::Table { temperature, flux } => Box::new(TabulatedExchange {
             table: crate::contact::Table::new(temperature.clone(), flux.clone(), ["temperature", "flux"]).map_err(
                 |e| {
-                    invalid(
-                        "heat_exchange",
-                        &e.to_string(),
-                        "a valid table of flux against temperature",
-                    )
+                    let key = format!("heat_exchange.{}", e.column().unwrap_or("flux"));
+                    invalid(&key, &e.to_string(), "a valid table of flux against temperature")
                 },
             )?,
         }),
