@@ -89,6 +89,13 @@ literal_matcher_from_pattern!(FloatLiteral, r"^[0-9]+(\.[0-9]+)?([eE][+-]?[0-9]+
 /// exmex's compiled form with its default float operators and our literals.
 type Compiled = FlatEx<f64, FloatOpsFactory<f64>, FloatLiteral>;
 
+/// The longest expression text, in bytes: a datum or a law is a formula, not data (a longer
+/// text would build a syntax tree too deep for the stack).
+pub const MAX_EXPRESSION_BYTES: usize = 4096;
+
+/// The deepest nesting of parentheses, signs and powers in an expression.
+pub const MAX_EXPRESSION_DEPTH: usize = 100;
+
 /// Errors of [`Expression::parse`]; each names the text it is about.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExpressionError {
@@ -107,6 +114,14 @@ pub enum ExpressionError {
     /// A name called as a function that is not one.
     #[error("unknown function `{name}` in the expression `{text}` (the functions are sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, exp, log, ln, log10, sqrt, abs, min, max, atan2)")]
     UnknownFunction { text: String, name: String },
+    /// A text longer than [`MAX_EXPRESSION_BYTES`] or nested deeper than
+    /// [`MAX_EXPRESSION_DEPTH`].
+    #[error("the expression `{start}…` is {what} (at most {limit}); write a shorter formula")]
+    TooLarge {
+        start: String,
+        what: &'static str,
+        limit: usize,
+    },
     /// A known function called with the wrong number of arguments.
     #[error("`{name}` takes {expected} argument(s) but is given {found} in the expression `{text}`")]
     Arity {
@@ -154,6 +169,9 @@ impl Expression {
     /// Parses `text`, an expression of x, y, z, t and the further variables `extra` (each `r`,
     /// the slip rate, or `theta`, the temperature: the arguments of a law on Γ_C).
     pub fn parse_with(text: &str, extra: &[&str]) -> Result<Expression, ExpressionError> {
+        if text.len() > MAX_EXPRESSION_BYTES {
+            return Err(too_large(text, "longer than its byte limit", MAX_EXPRESSION_BYTES));
+        }
         let mut allowed = [false; VARIABLES.len()];
         allowed[..SPACE_TIME].fill(true);
         for name in extra {
@@ -387,6 +405,8 @@ struct Parser<'a> {
     text: &'a str,
     /// Which of [`VARIABLES`] this expression may use.
     allowed: [bool; VARIABLES.len()],
+    /// The nesting depth of the `unary` being parsed (every recursion passes through it).
+    depth: usize,
     /// Tokens with the byte offset where each starts.
     tokens: Vec<(Token<'a>, usize)>,
     next: usize,
@@ -457,6 +477,7 @@ impl<'a> Parser<'a> {
         Ok(Parser {
             text,
             allowed,
+            depth: 0,
             tokens,
             next: 0,
         })
@@ -501,6 +522,20 @@ impl<'a> Parser<'a> {
     }
 
     fn unary(&mut self) -> Result<Node, ExpressionError> {
+        self.depth += 1;
+        if self.depth > MAX_EXPRESSION_DEPTH {
+            return Err(too_large(
+                self.text,
+                "nested deeper than its limit",
+                MAX_EXPRESSION_DEPTH,
+            ));
+        }
+        let node = self.unary_at_depth();
+        self.depth -= 1;
+        node
+    }
+
+    fn unary_at_depth(&mut self) -> Result<Node, ExpressionError> {
         match self.peek() {
             Token::Symbol('-') => {
                 self.next += 1;
@@ -621,6 +656,15 @@ impl<'a> Parser<'a> {
         } else {
             Err(self.error_here(message))
         }
+    }
+}
+
+/// [`ExpressionError::TooLarge`] with the text's first 40 characters.
+fn too_large(text: &str, what: &'static str, limit: usize) -> ExpressionError {
+    ExpressionError::TooLarge {
+        start: text.chars().take(40).collect(),
+        what,
+        limit,
     }
 }
 
@@ -817,6 +861,27 @@ mod tests {
             .unwrap()
             .derivative("r")
             .is_none());
+    }
+
+    #[test]
+    fn long_and_deep_expressions_are_refused_not_a_stack_overflow() {
+        let deep = format!("{}x{}", "(".repeat(9000), ")".repeat(9000));
+        let e = Expression::parse(&deep).unwrap_err();
+        assert!(matches!(e, ExpressionError::TooLarge { .. }), "{e}");
+        let nested = format!("{}x{}", "(".repeat(150), ")".repeat(150));
+        assert!(Expression::parse(&nested)
+            .unwrap_err()
+            .to_string()
+            .contains("nested deeper"));
+        assert!(Expression::parse(&format!("{}x", "-".repeat(500))).is_err());
+        let long = vec!["x"; 26_000].join("+");
+        let e = Expression::parse(&long).unwrap_err().to_string();
+        assert!(e.contains("4096") && e.contains("x+x+"), "{e}");
+        // Within the limits: a long sum parses and evaluates.
+        let sum = vec!["x"; 1500].join("+");
+        assert_eq!(Expression::parse(&sum).unwrap().eval([1.0, 0.0, 0.0], 0.0), 1500.0);
+        let fifty = format!("{}x{}", "(".repeat(50), ")".repeat(50));
+        assert_eq!(Expression::parse(&fifty).unwrap().eval([2.0, 0.0, 0.0], 0.0), 2.0);
     }
 
     #[test]

@@ -45,6 +45,9 @@ pub enum ModelError {
     /// A symmetry part that is not flat.
     #[error("the symmetry part `{part}` is not flat (a symmetry plane needs one normal)")]
     CurvedSymmetryPart { part: String },
+    /// A contact or symmetry part without facets.
+    #[error("the {role} part `{part}` has no facets (an empty physical group?): a {role} part needs at least one")]
+    EmptyPart { role: &'static str, part: String },
     /// A friction law given for a part that is not a contact part.
     #[error(
         "a friction law is given for `{part}` (friction.part), which is not a contact part (those are {contact:?})"

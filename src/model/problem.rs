@@ -394,6 +394,16 @@ impl ProblemBuilder {
             symmetry: find("symmetry", &self.symmetry)?,
         };
         no_shared_facets(&mesh, &parts)?;
+        // A contact or symmetry part carries conditions on its facets: one without any (an
+        // empty physical group) would silently impose nothing.
+        for (role, list) in [("contact", &parts.contact), ("symmetry", &parts.symmetry)] {
+            if let Some(&p) = list.iter().find(|&&p| mesh.facets_of(&[p]).next().is_none()) {
+                return Err(Error::EmptyPart {
+                    role,
+                    part: mesh.part_names[p].clone(),
+                });
+            }
+        }
         let material = self.material;
 
         // Constraints per node; Dirichlet wins at corners.

@@ -282,6 +282,42 @@ mod tests {
         }
     }
 
+    /// A header whose array lengths overflow (with a valid checksum) is refused as damaged,
+    /// not a panic.
+    #[test]
+    fn overflowing_lengths_are_damage() {
+        let dir = std::env::temp_dir().join(format!("tc-ckpt-overflow-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("checkpoint.bin");
+        let checkpoint = Checkpoint {
+            identity: Identity {
+                scenario: None,
+                mesh: "m".into(),
+            },
+            state: state(),
+            record: serde_json::json!({}),
+        };
+        write(&path, &checkpoint).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let at = MAGIC.len();
+        let header_len = u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
+        let header = std::str::from_utf8(&bytes[at + 8..at + 8 + header_len]).unwrap();
+        let huge = format!("\"lengths\":[{},{},4,1,1]", usize::MAX / 8 + 1, usize::MAX / 8 + 1);
+        let start = header.find("\"lengths\":[").unwrap();
+        let end = start + header[start..].find(']').unwrap() + 1;
+        let forged = format!("{}{huge}{}", &header[..start], &header[end..]);
+        let mut body = MAGIC.to_vec();
+        body.extend((forged.len() as u64).to_le_bytes());
+        body.extend(forged.as_bytes());
+        body.extend(&bytes[at + 8 + header_len..bytes.len() - 32]);
+        let digest = Sha256::digest(&body);
+        body.extend(digest.as_slice());
+        std::fs::write(&path, body).unwrap();
+        let error = read(&path).err().expect("refused");
+        assert!(matches!(error, CheckpointError::Damaged { .. }), "{error}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn a_checkpoint_reads_back_bit_for_bit_and_damage_is_refused() {
         let dir = std::env::temp_dir().join(format!("tc-ckpt-{}", std::process::id()));

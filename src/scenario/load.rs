@@ -60,6 +60,13 @@ impl Scenario {
         // A scenario is a page of settings; data arrays belong in mesh files. Parsing holds
         // ~60× the text in memory, so a huge file is refused before it is read.
         if let Ok(meta) = std::fs::metadata(path) {
+            // A FIFO would block forever and a device (/dev/zero) never end.
+            if !meta.is_file() {
+                return Err(Error::Scenario(format!(
+                    "{} is not a regular file (a folder, a FIFO or a device)",
+                    path.display()
+                )));
+            }
             if meta.len() > MAX_SCENARIO_BYTES {
                 return Err(Error::Scenario(format!(
                     "{} has {} bytes; a scenario file has at most {MAX_SCENARIO_BYTES}",

@@ -1,0 +1,51 @@
+//! Input at the edges (issue 26, in part): an empty contact part, a FIFO or a folder given as a
+//! scenario or mesh file, each refused with a message naming it instead of a silent run or a
+//! hang.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use thermocontact::mesh;
+use thermocontact::model::ProblemBuilder;
+use thermocontact::model::TimeGrid;
+use thermocontact::Scenario;
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermocontact-hostile-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn an_empty_contact_part_is_refused_by_name() {
+    let mut mesh = mesh::rectangle(4.0, 1.0, 4, 1);
+    mesh.part_names.push("lining".to_string());
+    let material = thermocontact::model::samples::paper_material();
+    let error = ProblemBuilder::new(mesh, material, TimeGrid::new(1.0, 4))
+        .dirichlet(&["left"])
+        .contact(&["bottom", "lining"])
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("`lining`") && error.contains("no facets"), "{error}");
+}
+
+#[test]
+fn a_fifo_or_a_folder_is_not_read_as_a_scenario_or_a_mesh() {
+    let dir = scratch("fifo");
+    let fifo = dir.join("scenario.toml");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let clock = Instant::now();
+    let error = Scenario::load_file(&fifo, &[]).unwrap_err().to_string();
+    assert!(
+        error.contains("not a regular file") && error.contains("scenario.toml"),
+        "{error}"
+    );
+    let error = mesh::read_msh(&fifo).unwrap_err().to_string();
+    assert!(error.contains("not a regular file"), "{error}");
+    let error = mesh::read_msh(&dir).unwrap_err().to_string();
+    assert!(error.contains("not a regular file"), "{error}");
+    assert!(clock.elapsed() < Duration::from_secs(5), "no read blocked");
+}
