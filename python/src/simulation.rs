@@ -21,10 +21,10 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList};
 use thermocontact::driver::{self, contact_csv_header, contact_csv_rows, OutputPlan, RunOptions, StopFlag};
-use thermocontact::output::fields;
 use thermocontact::model::State;
-use thermocontact::step::{SolverParams, StepInfo};
 use thermocontact::model::{contact_rows, ContactRow};
+use thermocontact::output::fields;
+use thermocontact::step::{SolverParams, StepInfo};
 use thermocontact::time::{self, Levels};
 use thermocontact::{Error, Interruption, Problem, Scenario};
 
@@ -339,6 +339,8 @@ pub struct PyState {
     xi: Py<PyArray2<f64>>,
     #[pyo3(get)]
     info: Option<PyStepInfo>,
+    /// The slip distances after and before the step (the contact table reads them).
+    slip_distance: [Vec<f64>; 2],
     problem: Arc<Problem>,
     slip_tolerance: f64,
     contact: PyOnceLock<Py<PyContact>>,
@@ -369,6 +371,7 @@ impl PyState {
             theta: PyArray1::from_vec(py, state.theta).unbind(),
             xi: matrix(py, state.xi, d - 1).unbind(),
             info: info.map(PyStepInfo::from),
+            slip_distance: [state.slip_distance, state.slip_distance_before],
             problem,
             slip_tolerance,
             contact,
@@ -389,6 +392,8 @@ impl PyState {
             w: vector(self.w.bind(py).as_any())?,
             theta: vector(self.theta.bind(py).as_any())?,
             xi: vector(self.xi.bind(py).as_any())?,
+            slip_distance: self.slip_distance[0].clone(),
+            slip_distance_before: self.slip_distance[1].clone(),
         })
     }
 }
@@ -519,7 +524,11 @@ impl PyContact {
     /// 1.0 / 0.0.
     fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let rows = contact_csv_rows(self.dim, &self.rows);
-        matrix(py, rows.concat(), contact_csv_header(self.dim, self.with_slip_distance()).len())
+        matrix(
+            py,
+            rows.concat(),
+            contact_csv_header(self.dim, self.with_slip_distance()).len(),
+        )
     }
 
     fn __len__(&self) -> usize {
