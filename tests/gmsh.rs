@@ -152,6 +152,15 @@ fn unreadable_and_unsupported_files_are_refused_naming_the_file() {
             text.replace("0.0 1.0 0.0\n", "0.5 0.5 0.0\n"),
             "degenerate",
         ),
+        // A node tag defined twice (the later definition would move the node).
+        (
+            "duplicate.msh",
+            text.replace(
+                "$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n",
+                "$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n3\n",
+            ),
+            "defined twice",
+        ),
         // A node that only a facet uses: not in any cell.
         (
             "unused.msh",
@@ -170,6 +179,11 @@ fn unreadable_and_unsupported_files_are_refused_naming_the_file() {
         let e = read_msh(&path).unwrap_err().to_string();
         assert!(e.contains(name) && e.contains(expected), "{name}: {e}");
     }
+    // Valid input: a file without its final newline reads as with it.
+    let path = scratch("no_final_newline.msh");
+    std::fs::write(&path, text.trim_end()).unwrap();
+    let without = read_msh(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(without.n_nodes(), 4);
 }
 
 /// A part named in a scenario that the mesh does not have: the message lists the mesh's parts.

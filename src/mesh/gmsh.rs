@@ -345,6 +345,14 @@ impl Raw {
                 advice: advice(b.code).to_string(),
             });
         }
+        // A node defined twice would be moved silently by its later definition.
+        let mut defined = std::collections::HashSet::with_capacity(self.nodes.len());
+        if let Some((tag, _)) = self.nodes.iter().find(|(tag, _)| !defined.insert(*tag)) {
+            return Err(MeshError::Format {
+                path: path.to_path_buf(),
+                message: format!("node {tag} is defined twice in $Nodes (each node tag once)"),
+            });
+        }
         // Node tags → compact indices, in order of the file, keeping nodes some element uses.
         let mut used: HashMap<u64, Option<usize>> = HashMap::new();
         for b in &self.blocks {
@@ -540,7 +548,10 @@ impl Cursor<'_> {
         let expected = format!("$End{}", self.section);
         match token {
             Ok(t) if t == expected => {
-                self.line()?;
+                // The rest of the line, if the file goes on (its final newline may be missing).
+                if self.pos < self.bytes.len() {
+                    self.line()?;
+                }
                 Ok(())
             }
             Ok(t) => Err(self.error(&format!(
@@ -559,7 +570,9 @@ impl Cursor<'_> {
             .position(|w| w == end.as_bytes())
             .ok_or_else(|| self.truncated())?;
         self.pos = self.pos.saturating_sub(1) + at + 1;
-        self.line()?;
+        if self.pos < self.bytes.len() {
+            self.line()?;
+        }
         Ok(())
     }
 }
