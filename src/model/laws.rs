@@ -169,36 +169,24 @@ impl<'p> ContactLaws<'p> {
     #[inline]
     pub fn heat(&self, i: usize, r: f64) -> f64 {
         let heating = &self.problem.heating;
-        let h = heating.law.heat(&self.points[i], r);
-        if heating.share == 1.0 {
-            h
-        } else {
-            heating.share * h
-        }
+        // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
+        heating.share * heating.law.heat(&self.points[i], r)
     }
 
     /// heat(i, to) − heat(i, from).
     #[inline]
     pub fn heat_change(&self, i: usize, from: f64, to: f64) -> f64 {
         let heating = &self.problem.heating;
-        let h = heating.law.heat_change(&self.points[i], from, to);
-        if heating.share == 1.0 {
-            h
-        } else {
-            heating.share * h
-        }
+        // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
+        heating.share * heating.law.heat_change(&self.points[i], from, to)
     }
 
     /// ∂/∂r of [`ContactLaws::heat`].
     #[inline]
     pub fn heat_derivative(&self, i: usize, r: f64) -> f64 {
         let heating = &self.problem.heating;
-        let h = heating.law.heat_derivative(&self.points[i], r);
-        if heating.share == 1.0 {
-            h
-        } else {
-            heating.share * h
-        }
+        // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
+        heating.share * heating.law.heat_derivative(&self.points[i], r)
     }
 
     /// The frictional heats at the contact nodes for w_τ node-major.
