@@ -179,11 +179,92 @@ fn unreadable_and_unsupported_files_are_refused_naming_the_file() {
         let e = read_msh(&path).unwrap_err().to_string();
         assert!(e.contains(name) && e.contains(expected), "{name}: {e}");
     }
+    // Counts larger than the rest of the file could hold: refused before anything is reserved.
+    for (name, body) in [
+        (
+            "many_nodes.msh",
+            text.replace("$Nodes\n1 4 1 4\n", "$Nodes\n1 400000000000 1 4\n"),
+        ),
+        (
+            "many_elements.msh",
+            text.replace("\n2 1 2 2\n", "\n2 1 2 2000000000000\n"),
+        ),
+        (
+            "huge_count.msh",
+            text.replace("$Nodes\n1 4 1 4\n", "$Nodes\n1 18446744073709551615 1 4\n"),
+        ),
+    ] {
+        let path = scratch(name);
+        std::fs::write(&path, &body).unwrap();
+        let e = read_msh(&path).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains("remain in the file"), "{name}: {e}");
+    }
     // Valid input: a file without its final newline reads as with it.
     let path = scratch("no_final_newline.msh");
     std::fs::write(&path, text.trim_end()).unwrap();
     let without = read_msh(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(without.n_nodes(), 4);
+}
+
+/// Valid meshes that earlier readers refused: sparse or offset node and element tags (every tag
+/// + 100 000), and a mesh scaled by 10⁻¹⁰⁰ (products of two signed measures underflow; their
+/// signs do not).
+#[test]
+fn offset_tags_and_tiny_scales_read_as_the_same_mesh() {
+    // Gmsh's own file, its $Nodes and $Elements rewritten with every tag + 100 000.
+    let text = std::fs::read_to_string(meshes().join("annulus_41.msh")).unwrap();
+    let shift = |token: &str| (token.parse::<u64>().unwrap() + 100_000).to_string();
+    let shift_all = |line: &str| line.split_whitespace().map(shift).collect::<Vec<_>>().join(" ");
+    let mut lines = text.lines();
+    let mut out: Vec<String> = Vec::new();
+    while let Some(line) = lines.next() {
+        out.push(line.to_string());
+        let (is_nodes, is_elements) = (line == "$Nodes", line == "$Elements");
+        if !(is_nodes || is_elements) {
+            continue;
+        }
+        let header: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
+        // numBlocks numItems minTag maxTag: the tags shift.
+        out.push(format!(
+            "{} {} {} {}",
+            header[0],
+            header[1],
+            shift(header[2]),
+            shift(header[3])
+        ));
+        for _ in 0..header[0].parse::<usize>().unwrap() {
+            let block = lines.next().unwrap();
+            out.push(block.to_string());
+            let n: usize = block.split_whitespace().nth(3).unwrap().parse().unwrap();
+            if is_nodes {
+                (0..n).for_each(|_| out.push(shift_all(lines.next().unwrap())));
+                (0..n).for_each(|_| out.push(lines.next().unwrap().to_string()));
+            } else {
+                (0..n).for_each(|_| out.push(shift_all(lines.next().unwrap())));
+            }
+        }
+    }
+    let path = scratch("offset_tags.msh");
+    std::fs::write(&path, out.join("\n") + "\n").unwrap();
+    let reference = read_msh(&meshes().join("annulus_41.msh")).unwrap();
+    let read = read_msh(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(parts(&read), parts(&reference));
+    assert_eq!(
+        (read.n_cells(), read.coords.clone()),
+        (reference.n_cells(), reference.coords.clone())
+    );
+
+    let rectangle = mesh::rectangle(2.0, 1.0, 4, 2);
+    let tiny = Mesh::new(
+        2,
+        rectangle.coords.iter().map(|x| x.map(|c| c * 1e-100)).collect(),
+        rectangle.cells.clone(),
+        rectangle.facets.clone(),
+        rectangle.facet_parts.clone(),
+        rectangle.part_names.clone(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(tiny.facets, rectangle.facets);
 }
 
 /// A part named in a scenario that the mesh does not have: the message lists the mesh's parts.

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::{topology, Mesh};
+use super::{overlap, topology, Mesh};
 use crate::mesh::simplex::Simplex;
 
 /// What is wrong with a mesh or a mesh file. Every variant says what and where.
@@ -54,6 +54,12 @@ pub enum MeshError {
     /// Two cells on the same side of their common face: one is inverted, or they overlap.
     #[error("cells {} and {} lie on the same side of their common face {facet:?}: a cell is inverted or they overlap", cells[0], cells[1])]
     Tangled { cells: [usize; 2], facet: Vec<[f64; 3]> },
+    /// Two cells that share no face overlap: the centre of one lies inside the other.
+    #[error(
+        "the centre {at:?} of cell {} lies inside cell {}: cells overlap without sharing a face (a cell laid across others, or a volume meshed twice)",
+        cells[0], cells[1]
+    )]
+    Overlapping { cells: [usize; 2], at: [f64; 3] },
     /// A boundary-part facet inside the domain.
     #[error("a facet of part `{part}` lies inside the domain (between two cells), at {facet:?}")]
     FacetInside { part: String, facet: Vec<[f64; 3]> },
@@ -80,7 +86,7 @@ impl Mesh {
     /// A mesh from its parts, checked: d = 2 or 3; finite coordinates (z = 0 in 2D); cells of
     /// d + 1 and facets of d valid node indices; no degenerate cell; every node in some cell; every
     /// face shared by at most two cells, lying on opposite sides of it (no inverted or
-    /// overlapping cells); every boundary-part facet the face of exactly one cell; distinct part
+    /// overlapping cells); no cell's centre inside another cell (overlaps without a common face); every boundary-part facet the face of exactly one cell; distinct part
     /// names. The boundary facets are then oriented outward. Cells may have either orientation.
     pub fn new(
         dim: usize,
@@ -138,6 +144,7 @@ impl Mesh {
         mesh.check_cells()?;
         let faces = topology::cell_faces(&mesh);
         topology::check_cells(&mesh, &faces)?;
+        overlap::check_overlap(&mesh)?;
         topology::orient_boundary(&mut mesh, &faces)?;
         Ok(mesh)
     }

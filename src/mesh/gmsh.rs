@@ -196,7 +196,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Raw, MeshError> {
 fn parse_names(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
     // Always ASCII, also in binary files.
     let binary = std::mem::replace(&mut c.binary, false);
-    let n = c.size()?;
+    let n = c.count(6, 6, "physical names")?;
     c.line()?; // the end of the count's line
     for _ in 0..n {
         let line = c.line()?;
@@ -238,13 +238,14 @@ fn parse_entities(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
 }
 
 fn parse_nodes4(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
-    let (n_blocks, n_nodes) = (c.size()?, c.size()?);
-    c.size()?;
-    c.size()?;
+    // A node takes at least its tag and three coordinates: 8 bytes in ASCII, 32 in binary.
+    let (n_blocks, n_nodes) = (c.count(8, 20, "node blocks")?, c.count(8, 32, "nodes")?);
+    c.size_u64()?; // the smallest and largest tags: any values (sparse or offset tags)
+    c.size_u64()?;
     raw.nodes.reserve(n_nodes);
     for _ in 0..n_blocks {
         let (dim, _entity, parametric) = (c.int()?, c.int()?, c.int()?);
-        let n = c.size()?;
+        let n = c.count(8, 32, "nodes in a block")?;
         let tags = (0..n).map(|_| c.size_u64()).collect::<Result<Vec<u64>, _>>()?;
         let extra = if parametric != 0 { dim.clamp(0, 3) as usize } else { 0 };
         for tag in tags {
@@ -259,17 +260,20 @@ fn parse_nodes4(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
 }
 
 fn parse_elements4(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
-    let n_blocks = c.size()?;
-    for _ in 0..3 {
-        c.size()?;
-    }
+    let n_blocks = c.count(8, 20, "element blocks")?;
+    c.size_u64()?; // the number of elements, the smallest and the largest tag: not needed
+    c.size_u64()?;
+    c.size_u64()?;
     for _ in 0..n_blocks {
         let (dim, entity, code) = (c.int()?, c.int()?, c.int()?);
-        let n = c.size()?;
         let code = code as u32;
         let Some((_, per, _)) = element_type(code) else {
             return Err(c.error(&format!("unknown element type {code}")));
         };
+        // An element takes at least its tag and `per` node tags: 2 bytes each in ASCII, 8 in
+        // binary; the reservation below is then at most 4× the rest of the file.
+        let per64 = per as u64;
+        let n = c.count(2 * (1 + per64), 8 * (1 + per64), "elements in a block")?;
         let mut nodes = Vec::with_capacity(n * per);
         for _ in 0..n {
             c.size_u64()?; // element tag
@@ -288,7 +292,7 @@ fn parse_elements4(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
 }
 
 fn parse_nodes2(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
-    let n = c.size()?;
+    let n = c.count(8, 8, "nodes")?;
     raw.nodes.reserve(n);
     for _ in 0..n {
         let tag = c.size_u64()?;
@@ -298,10 +302,11 @@ fn parse_nodes2(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
 }
 
 fn parse_elements2(c: &mut Cursor, raw: &mut Raw) -> Result<(), MeshError> {
-    let n = c.size()?;
+    // An element takes at least its tag, type, number of tags and two nodes: 10 bytes.
+    let n = c.count(10, 10, "elements")?;
     let mut groups: Vec<Vec<i32>> = Vec::new();
     for _ in 0..n {
-        c.size()?; // element tag
+        c.size_u64()?; // element tag
         let code = c.int()? as u32;
         let n_tags = c.size()?;
         let tags = (0..n_tags).map(|_| c.int()).collect::<Result<Vec<i32>, _>>()?;
@@ -508,11 +513,23 @@ impl Cursor<'_> {
         }
     }
 
-    /// A count, bounded by what the rest of the file could hold.
+    /// A small count (of entities, groups, tags), bounded by what the rest of the file holds.
     fn size(&mut self) -> Result<usize, MeshError> {
+        self.count(2, 4, "items")
+    }
+
+    /// A count of `what`, each taking at least `ascii` bytes in an ASCII file (`binary` in a
+    /// binary one), refused when the rest of the file cannot hold that many: whatever is
+    /// reserved from a count is then a few times the file's size at most, never what a
+    /// damaged or hostile count asks for.
+    fn count(&mut self, ascii: u64, binary: u64, what: &str) -> Result<usize, MeshError> {
         let n = self.size_u64()?;
-        if n > self.bytes.len() as u64 {
-            return Err(self.error(&format!("a count of {n} is more than the file could hold")));
+        let need = n.saturating_mul(if self.binary { binary } else { ascii });
+        let rest = (self.bytes.len() - self.pos) as u64;
+        if need > rest {
+            return Err(self.error(&format!(
+                "{n} {what} need at least {need} bytes, but {rest} remain in the file (a wrong count, or a truncated file)"
+            )));
         }
         Ok(n as usize)
     }

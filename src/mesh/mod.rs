@@ -19,6 +19,7 @@ pub mod chains;
 mod check;
 mod cuboid;
 mod gmsh;
+mod overlap;
 pub mod simplex;
 mod structured;
 pub(crate) mod topology;

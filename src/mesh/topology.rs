@@ -77,8 +77,9 @@ pub(crate) fn check_cells(mesh: &Mesh, faces: &[Face]) -> Result<(), MeshError> 
             });
         }
         if let [a, b] = group {
-            let side = |opposite: usize| side_of(mesh, &a.key, opposite);
-            if side(a.opposite) * side(b.opposite) >= 0.0 {
+            // Signs, not the product: two sides of 10⁻²⁰⁰ each multiply to 0 (underflow).
+            let (sa, sb) = (side_of(mesh, &a.key, a.opposite), side_of(mesh, &a.key, b.opposite));
+            if sa == 0.0 || sb == 0.0 || sa.is_sign_positive() == sb.is_sign_positive() || sa.is_nan() || sb.is_nan() {
                 return Err(MeshError::Tangled {
                     cells: [a.cell, b.cell],
                     facet: face_coords(mesh, &a.key),
