@@ -84,3 +84,39 @@ mod tests {
         assert_eq!(human(3.0 * (1u64 << 30) as f64), "3.0 GiB");
     }
 }
+
+/// Reads an input file (a scenario, a mesh, a table, a checkpoint) of at most `max_bytes`:
+/// regular files only (a FIFO would block forever, a device such as /dev/zero never end), and
+/// never more than `max_bytes`, even when the file grows while it is read. The errors are
+/// [`std::io::Error`]s that say which limit: callers name the file (or key).
+pub fn read_input(path: &std::path::Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "not a regular file (a folder, a FIFO or a device)",
+        ));
+    }
+    let too_large = |bytes: u64| {
+        Error::new(
+            ErrorKind::InvalidInput,
+            format!("{bytes} bytes, more than the {max_bytes} read from a file of this kind"),
+        )
+    };
+    if meta.len() > max_bytes {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)?.take(max_bytes + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// The largest mesh or checkpoint file read: an eighth of the machine's memory (4 GiB where it
+/// is unknown), since reading holds the file and a few times its size while the mesh is built.
+pub fn max_data_file_bytes() -> u64 {
+    machine_memory().map_or(4 << 30, |m| (m / 8.0) as u64)
+}

@@ -49,3 +49,39 @@ fn a_fifo_or_a_folder_is_not_read_as_a_scenario_or_a_mesh() {
     assert!(error.contains("not a regular file"), "{error}");
     assert!(clock.elapsed() < Duration::from_secs(5), "no read blocked");
 }
+
+/// Every input file goes through one reader: a FIFO given as a friction table or a checkpoint
+/// is refused as promptly as a scenario or a mesh, and a scenario over its size limit is
+/// refused before it is read.
+#[test]
+fn every_input_file_is_a_regular_file_within_its_limit() {
+    let dir = scratch("inputs");
+    let fifo = dir.join("mu.csv");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let clock = Instant::now();
+    let table = format!("friction={{law=\"table\", bound=1.0, file=\"{}\"}}", fifo.display());
+    let error = Scenario::load(None, &[table]).unwrap_err().to_string();
+    assert!(
+        error.contains("not a regular file") && error.contains("friction"),
+        "{error}"
+    );
+    let error = thermocontact::output::checkpoint::read(&fifo).unwrap_err().to_string();
+    assert!(
+        error.contains("not a regular file") && error.contains("mu.csv"),
+        "{error}"
+    );
+    assert!(clock.elapsed() < Duration::from_secs(5), "no read blocked");
+
+    let big = dir.join("big.toml");
+    let limit = thermocontact::scenario::MAX_SCENARIO_BYTES as usize;
+    std::fs::write(&big, format!("# {}\n", "x".repeat(limit))).unwrap();
+    let error = Scenario::load_file(&big, &[]).unwrap_err().to_string();
+    assert!(
+        error.contains("big.toml") && error.contains(&limit.to_string()),
+        "{error}"
+    );
+}

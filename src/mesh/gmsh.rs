@@ -27,21 +27,12 @@ use super::{Mesh, MeshError};
 
 /// Reads a Gmsh `.msh` file (MSH 4.1 ASCII or binary, MSH 2.2 ASCII).
 pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
-    // A FIFO would block forever and a device (/dev/zero) never end: regular files only.
-    let meta = std::fs::metadata(path).map_err(|e| MeshError::Read {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
-    if !meta.is_file() {
-        return Err(MeshError::Read {
+    // Regular files of a size the machine can hold only (a FIFO would block forever).
+    let bytes =
+        crate::resources::read_input(path, crate::resources::max_data_file_bytes()).map_err(|e| MeshError::Read {
             path: path.to_path_buf(),
-            message: "not a regular file (a folder, a FIFO or a device)".to_string(),
-        });
-    }
-    let bytes = std::fs::read(path).map_err(|e| MeshError::Read {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+            message: e.to_string(),
+        })?;
     let raw = parse(&bytes, path)?;
     raw.into_mesh(path)
 }

@@ -12,7 +12,7 @@
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 //!
-//! Depends on: nothing of this crate (the bottom layer, beside `resources`).
+//! Depends on: `resources` (reading input files within limits); the bottom layer.
 
 mod annulus;
 pub mod chains;

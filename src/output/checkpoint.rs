@@ -168,9 +168,11 @@ impl Write for Hashed<'_> {
 
 /// Reads a checkpoint, checking its format and checksum.
 pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
-    let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
-        path: path.to_path_buf(),
-        source,
+    let bytes = crate::resources::read_input(path, crate::resources::max_data_file_bytes()).map_err(|source| {
+        CheckpointError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     let damaged = |reason| CheckpointError::Damaged {
         path: path.to_path_buf(),

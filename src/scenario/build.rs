@@ -153,11 +153,9 @@ pub(super) fn heat_exchange(spec: &HeatExchangeSpec) -> Result<Box<dyn HeatExcha
 /// The two columns of a CSV file (slip rate, coefficient), one row per line; the first line
 /// that is not a comment may be a header; `#` starts a comment.
 fn read_table_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("a readable CSV file ({e})"))?;
-    if !meta.is_file() || meta.len() > 16 << 20 {
-        return Err("a regular CSV file of at most 16 MiB".to_string());
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("a readable CSV file ({e})"))?;
+    let bytes = crate::resources::read_input(path, 16 << 20)
+        .map_err(|e| format!("a readable regular CSV file of at most 16 MiB ({e})"))?;
+    let text = String::from_utf8(bytes).map_err(|_| "a CSV file of UTF-8 text".to_string())?;
     let (mut x, mut y) = (Vec::new(), Vec::new());
     let mut header_seen = false;
     for (number, line) in text.lines().enumerate() {

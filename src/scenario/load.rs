@@ -59,25 +59,15 @@ impl Scenario {
     pub fn load_file(path: &Path, overrides: &[String]) -> Result<Self, Error> {
         // A scenario is a page of settings; data arrays belong in mesh files. Parsing holds
         // ~60× the text in memory, so a huge file is refused before it is read.
-        if let Ok(meta) = std::fs::metadata(path) {
-            // A FIFO would block forever and a device (/dev/zero) never end.
-            if !meta.is_file() {
-                return Err(Error::Scenario(format!(
-                    "{} is not a regular file (a folder, a FIFO or a device)",
-                    path.display()
-                )));
-            }
-            if meta.len() > MAX_SCENARIO_BYTES {
-                return Err(Error::Scenario(format!(
-                    "{} has {} bytes; a scenario file has at most {MAX_SCENARIO_BYTES}",
-                    path.display(),
-                    meta.len()
-                )));
-            }
-        }
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        let bytes = crate::resources::read_input(path, MAX_SCENARIO_BYTES).map_err(|source| Error::Read {
             path: path.to_path_buf(),
             source,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|_| {
+            Error::Scenario(format!(
+                "{} is not UTF-8 text (a scenario is a TOML file)",
+                path.display()
+            ))
         })?;
         Self::load_in(Some(&text), overrides, path.parent(), None)
     }
