@@ -85,3 +85,41 @@ fn every_input_file_is_a_regular_file_within_its_limit() {
         "{error}"
     );
 }
+
+/// Messages (issue 26, item 14): an unknown key lists every key its table may hold (the
+/// optional ones too) with the nearest spelling; an unknown law names the key and the laws; a
+/// datum table names its stray key; a TOML syntax error names the file.
+#[test]
+fn messages_name_the_key_the_value_and_the_file() {
+    let error = |set: &str| Scenario::load(None, &[set.to_string()]).unwrap_err().to_string();
+    let e = error("boundary.symetry=[\"x\"]");
+    assert!(
+        e.contains("`symmetry`") && e.contains("did you mean `boundary.symmetry`?"),
+        "{e}"
+    );
+    let e = error("mesh.fille=\"a.msh\"");
+    assert!(
+        e.contains("`file`") && e.contains("`nz`") && e.contains("did you mean `mesh.file`?"),
+        "{e}"
+    );
+    for set in ["friction={law=\"tabel\"}", "friction.law=\"tabel\""] {
+        let e = error(set);
+        assert!(
+            e.contains("`friction.law`") && e.contains("\"tabel\"") && e.contains("`table`") && !e.contains("variant"),
+            "{e}"
+        );
+    }
+    let e = error("heat_exchange={law=\"lin\"}");
+    assert!(
+        e.contains("`heat_exchange.law`") && e.contains("`linear`") && !e.contains("variant"),
+        "{e}"
+    );
+    let e = error("friction.bound={constant=1, rate=2, slope=3}");
+    assert!(e.contains("`slope`"), "{e}");
+
+    let dir = scratch("messages");
+    let file = dir.join("broken.toml");
+    std::fs::write(&file, "[time]\nsteps = [1,\n").unwrap();
+    let e = Scenario::load_file(&file, &[]).unwrap_err().to_string();
+    assert!(e.contains("broken.toml") && e.contains("line 2"), "{e}");
+}

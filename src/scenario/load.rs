@@ -69,7 +69,13 @@ impl Scenario {
                 path.display()
             ))
         })?;
-        Self::load_in(Some(&text), overrides, path.parent(), None)
+        Self::load_in(Some(&text), overrides, path.parent(), None).map_err(|e| match e {
+            // A syntax error is about the file: name it (keys and values name themselves).
+            Error::Scenario(message) if message.starts_with(NOT_TOML) => {
+                Error::Scenario(format!("{}: {message}", path.display()))
+            }
+            e => e,
+        })
     }
 
     fn load_in(
@@ -85,7 +91,7 @@ impl Scenario {
         if let Some(text) = file_text {
             let mut user: Table = text
                 .parse()
-                .map_err(|e: toml::de::Error| Error::Scenario(format!("the file is not valid TOML: {e}")))?;
+                .map_err(|e: toml::de::Error| Error::Scenario(format!("{NOT_TOML}: {e}")))?;
             resolve_mesh_file(&mut user, folder);
             if given.is_some() {
                 refuse_mesh_keys(&user)?;
@@ -193,6 +199,47 @@ fn resolve_mesh_file(user: &mut Table, folder: Option<&Path>) {
     }
 }
 
+/// The error for `key` (at `path`), unknown to the table `base`: every key the table may hold
+/// (its own and the optional ones under the same prefix), and the nearest by spelling.
+fn unknown_key(base: &Table, key: &str, path: String) -> Error {
+    let prefix = path.strip_suffix(key).unwrap_or("");
+    let mut known: Vec<&str> = base.keys().map(String::as_str).collect();
+    known.extend(
+        OPTIONAL_KEYS
+            .iter()
+            .filter_map(|k| k.strip_prefix(prefix))
+            .filter(|k| !k.contains('.')),
+    );
+    known.sort_unstable();
+    known.dedup();
+    let mut expected = known.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
+    let nearest = known
+        .iter()
+        .map(|k| (edit_distance(k, key), *k))
+        .min()
+        .filter(|&(d, k)| d <= 2.max(k.len() / 3));
+    if let Some((_, k)) = nearest {
+        expected += &format!("; did you mean `{prefix}{k}`?");
+    }
+    Error::UnknownKey { key: path, expected }
+}
+
+/// Levenshtein distance (keys are short).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (row[j + 1] + 1).min(row[j] + 1).min(diagonal + usize::from(ca != *cb));
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
 /// Turns a deserialization error into one that names the dotted key it failed at, found from
 /// the error's span in the (re-serialized) scenario text.
 fn describe(e: &toml::de::Error, text: &str) -> Error {
@@ -210,6 +257,23 @@ fn describe(e: &toml::de::Error, text: &str) -> Error {
             .map(|t| t.trim_matches(|c| c == '[' || c == ']').to_string())
     };
     if let Some(table) = header(line) {
+        // An unknown `law` (serde names the tag after the message: "… in `law`").
+        if let Some((variant, expected)) = unknown_variant(&message) {
+            // "[[friction]] number 2: unknown variant …" keeps its entry.
+            let entry = message
+                .split_once("unknown variant")
+                .map_or("", |(p, _)| p.trim_end_matches([' ', ':']));
+            let within = if entry.is_empty() {
+                String::new()
+            } else {
+                format!(" ({entry})")
+            };
+            return Error::InvalidValue {
+                key: format!("{table}.law"),
+                value: format!("\"{variant}\"{within}"),
+                expected: format!("one of {expected}"),
+            };
+        }
         // The error is about the table as a whole (a key it lacks or must not have).
         if let Some(field) = missing_field(&message) {
             return Error::MissingKey {
@@ -238,8 +302,19 @@ fn missing_field(message: &str) -> Option<&str> {
     message.strip_prefix("missing field `")?.strip_suffix('`')
 }
 
+/// The variant and the list of serde's "unknown variant `tabel`, expected one of `a`, `b`".
+fn unknown_variant(message: &str) -> Option<(&str, &str)> {
+    let rest = message.split_once("unknown variant `")?.1;
+    let (variant, rest) = rest.split_once('`')?;
+    let expected = rest.split_once("expected one of ")?.1.lines().next()?;
+    Some((variant, expected.trim()))
+}
+
 /// serde's "invalid value: integer `-1`, expected usize" as what a user should write.
 fn plain(message: &str) -> String {
+    if let Some((_, expected)) = unknown_variant(message) {
+        return format!("one of {expected}");
+    }
     match message.rsplit_once(", expected ") {
         Some((_, "usize" | "u64" | "u32")) => "a non-negative integer".into(),
         Some((_, "a string")) => "a string".into(),
@@ -248,6 +323,9 @@ fn plain(message: &str) -> String {
         _ => message.to_string(),
     }
 }
+
+/// The start of the message for a scenario text that is not TOML.
+const NOT_TOML: &str = "the file is not valid TOML";
 
 /// Keys a scenario may hold that the default (a 2D scenario) does not: they are taken as given
 /// and checked when the scenario is read.
@@ -316,11 +394,7 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
             continue;
         }
         let Some(slot) = base.get_mut(&key) else {
-            let known: Vec<&String> = base.keys().collect();
-            return Err(Error::UnknownKey {
-                key: path,
-                expected: format!("{known:?}"),
-            });
+            return Err(unknown_key(base, &key, path));
         };
         if DATUM_KEYS.contains(&path.as_str()) {
             *slot = value;

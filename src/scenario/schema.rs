@@ -210,6 +210,15 @@ impl<'de> Deserialize<'de> for DatumSpec {
                     }
                 }
             }
+            Value::Table(table) => {
+                // Name what is wrong with the table: a key that is not `constant` or `rate`, or
+                // one of the two missing.
+                let message = match table.keys().find(|k| !["constant", "rate"].contains(&k.as_str())) {
+                    Some(extra) => format!("`{extra}` is not a key of a {{ constant, rate }} table"),
+                    None => "a { constant, rate } table needs both `constant` and `rate`".to_string(),
+                };
+                return Err(D::Error::custom(message));
+            }
             _ => return Err(D::Error::custom(DATUM_FORMS)),
         };
         Ok(spec)

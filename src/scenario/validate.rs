@@ -442,16 +442,25 @@ const STEP_MATRIX_KEYS: &str = "It is built from material.density, material.youn
      material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps (k): check their \
      magnitudes";
 
+/// The keys of a step's data (its right-hand side and contact terms), named first for a
+/// non-finite solve: the scenario's numbers are bounded (magnitudes ≤ 10¹⁸) where expressions
+/// are not, so an overflow past 10³⁰⁸ more often comes from the data than from the matrix.
+const STEP_DATA_KEYS: &str = "The step's data come from loads.body_force, loads.traction, loads.pressure, \
+     loads.heat_source, initial.displacement, initial.velocity, initial.temperature, friction.bound, \
+     frictional_heating and heat_exchange (their expressions too); its matrix";
+
 /// The scenario keys behind an error, as a hint to append to its message: for a failed
 /// factorization or a non-finite solve of the step matrix, the keys the matrix is built from;
 /// `None` for any other error. The scenario layer is the one place that names keys.
-pub fn keys_behind(error: &Error) -> Option<&'static str> {
+pub fn keys_behind(error: &Error) -> Option<String> {
     use crate::la::LaError;
     use crate::step::StepError;
     match error {
-        Error::Step(StepError::La(LaError::Factorization { .. } | LaError::NonFiniteSolution { .. })) => {
-            Some(STEP_MATRIX_KEYS)
-        }
+        Error::Step(StepError::La(LaError::Factorization { .. })) => Some(STEP_MATRIX_KEYS.to_string()),
+        Error::Step(StepError::La(LaError::NonFiniteSolution { .. })) => Some(format!(
+            "{STEP_DATA_KEYS} {}",
+            STEP_MATRIX_KEYS.strip_prefix("It ").unwrap_or(STEP_MATRIX_KEYS)
+        )),
         _ => None,
     }
 }
@@ -472,12 +481,19 @@ mod tests {
             stage: FactorStage::Numeric,
             detail: "zero pivot".into(),
         }));
-        assert_eq!(keys_behind(&factorization), Some(expected));
+        assert_eq!(keys_behind(&factorization).as_deref(), Some(expected));
         let non_finite = Error::Step(StepError::La(LaError::NonFiniteSolution {
             non_finite: 3,
             unknowns: 12,
         }));
-        assert_eq!(keys_behind(&non_finite), Some(expected));
+        // A non-finite solve names the data first (a load's expression may overflow), then the
+        // matrix.
+        let named = keys_behind(&non_finite).unwrap();
+        assert!(
+            named.starts_with("The step's data come from loads.body_force"),
+            "{named}"
+        );
+        assert!(named.ends_with(&expected[3..]), "{named}");
         let krylov = Error::Step(StepError::La(LaError::KrylovNotConverged {
             method: "GMRES",
             iterations: 10,
