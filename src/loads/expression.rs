@@ -299,12 +299,22 @@ impl PartialEq for Expression {
 }
 
 /// The syntax tree of the grammar.
+///
+/// A sum or a product is one [`Node::Chain`], however many terms it has, so the tree is only as
+/// deep as the nesting: a level of [`MAX_EXPRESSION_DEPTH`] (a parenthesis, a sign, a power, a
+/// function's argument) adds at most four nodes (a `Negate`, or a `Power` or `Call`, then the
+/// chains of its operand's `+` and `*`), and the tree is at most 4·(MAX_EXPRESSION_DEPTH + 1)
+/// = 404 nodes deep, which bounds every recursion over it.
 #[derive(Debug)]
 enum Node {
     Number(f64),
     Variable(usize),
     Negate(Box<Node>),
-    Binary(char, Box<Node>, Box<Node>),
+    /// `first op₁ n₁ op₂ n₂ …`, the operators all `+`/`-` or all `*`/`/`, evaluated from the
+    /// left: ((first op₁ n₁) op₂ n₂) …, as a left-associative binary tree would be.
+    Chain(Box<Node>, Vec<(char, Node)>),
+    /// base ^ exponent.
+    Power(Box<Node>, Box<Node>),
     /// Index into [`FUNCTIONS`] and the arguments.
     Call(usize, Vec<Node>),
 }
@@ -315,12 +325,22 @@ impl Node {
             Node::Number(_) => {}
             Node::Variable(k) => uses[*k] = true,
             Node::Negate(a) => a.mark_variables(uses),
-            Node::Binary(_, a, b) => {
+            Node::Chain(first, rest) => {
+                first.mark_variables(uses);
+                rest.iter().for_each(|(_, a)| a.mark_variables(uses));
+            }
+            Node::Power(a, b) => {
                 a.mark_variables(uses);
                 b.mark_variables(uses);
             }
             Node::Call(_, args) => args.iter().for_each(|a| a.mark_variables(uses)),
         }
+    }
+
+    /// Whether the square of a variable, `x^2`, which is evaluated as the product x·x (as
+    /// exact as `powf`: both are x² correctly rounded, and faster).
+    fn is_square_of_variable(base: &Node, exponent: &Node) -> bool {
+        matches!(base, Node::Variable(_)) && matches!(exponent, Node::Number(v) if *v == 2.0)
     }
 
     /// Fully parenthesized text in exmex's syntax: every precedence decision is ours.
@@ -329,13 +349,15 @@ impl Node {
             Node::Number(v) => format!("{v:?}"),
             Node::Variable(k) => VARIABLES[*k].to_string(),
             Node::Negate(a) => format!("(-({}))", a.canonical()),
-            // exmex's `^` is `powf`; a square of a variable is a product, as fast as Rust's and
-            // as exact (both are x² correctly rounded).
-            Node::Binary('^', a, b) if matches!(**a, Node::Variable(_)) && matches!(**b, Node::Number(2.0)) => {
+            // exmex's `^` is `powf`; a square of a variable is a product.
+            Node::Power(a, b) if Node::is_square_of_variable(a, b) => {
                 let x = a.canonical();
                 format!("({x} * {x})")
             }
-            Node::Binary(op, a, b) => format!("(({}) {op} ({}))", a.canonical(), b.canonical()),
+            Node::Power(a, b) => format!("(({}) ^ ({}))", a.canonical(), b.canonical()),
+            Node::Chain(first, rest) => rest.iter().fold(first.canonical(), |text, (op, a)| {
+                format!("(({text}) {op} ({}))", a.canonical())
+            }),
             Node::Call(f, args) => {
                 let name = FUNCTIONS[*f].1;
                 match args.as_slice() {
@@ -354,16 +376,16 @@ impl Node {
             Node::Number(v) => *v,
             Node::Variable(_) => unreachable!("only called on constant trees"),
             Node::Negate(a) => -a.value(),
-            Node::Binary(op, a, b) => {
-                let (a, b) = (a.value(), b.value());
+            Node::Chain(first, rest) => rest.iter().fold(first.value(), |a, (op, b)| {
+                let b = b.value();
                 match op {
                     '+' => a + b,
                     '-' => a - b,
                     '*' => a * b,
-                    '/' => a / b,
-                    _ => a.powf(b),
+                    _ => a / b,
                 }
-            }
+            }),
+            Node::Power(a, b) => a.value().powf(b.value()),
             Node::Call(f, args) => {
                 let a = args[0].value();
                 match FUNCTIONS[*f].0 {
@@ -504,21 +526,36 @@ impl<'a> Parser<'a> {
     }
 
     fn expr(&mut self) -> Result<Node, ExpressionError> {
-        let mut node = self.term()?;
-        while let Token::Symbol(op @ ('+' | '-')) = self.peek() {
-            self.next += 1;
-            node = Node::Binary(op, Box::new(node), Box::new(self.term()?));
-        }
-        Ok(node)
+        let first = self.term()?;
+        self.chain(first, &['+', '-'], Self::term)
     }
 
     fn term(&mut self) -> Result<Node, ExpressionError> {
-        let mut node = self.unary()?;
-        while let Token::Symbol(op @ ('*' | '/')) = self.peek() {
+        let first = self.unary()?;
+        self.chain(first, &['*', '/'], Self::unary)
+    }
+
+    /// `first` and every further `op operand` with `op` one of `ops`: one [`Node::Chain`]
+    /// (`first` alone if there is none).
+    fn chain(
+        &mut self,
+        first: Node,
+        ops: &[char; 2],
+        mut operand: impl FnMut(&mut Self) -> Result<Node, ExpressionError>,
+    ) -> Result<Node, ExpressionError> {
+        let mut rest = Vec::new();
+        while let Token::Symbol(op) = self.peek() {
+            if !ops.contains(&op) {
+                break;
+            }
             self.next += 1;
-            node = Node::Binary(op, Box::new(node), Box::new(self.unary()?));
+            rest.push((op, operand(self)?));
         }
-        Ok(node)
+        Ok(if rest.is_empty() {
+            first
+        } else {
+            Node::Chain(Box::new(first), rest)
+        })
     }
 
     fn unary(&mut self) -> Result<Node, ExpressionError> {
@@ -555,7 +592,7 @@ impl<'a> Parser<'a> {
             self.next += 1;
             // The exponent is a `unary`, itself ending in a `power`: right associativity.
             let exponent = self.unary()?;
-            return Ok(Node::Binary('^', Box::new(base), Box::new(exponent)));
+            return Ok(Node::Power(Box::new(base), Box::new(exponent)));
         }
         Ok(base)
     }
@@ -882,6 +919,44 @@ mod tests {
         assert_eq!(Expression::parse(&sum).unwrap().eval([1.0, 0.0, 0.0], 0.0), 1500.0);
         let fifty = format!("{}x{}", "(".repeat(50), ")".repeat(50));
         assert_eq!(Expression::parse(&fifty).unwrap().eval([2.0, 0.0, 0.0], 0.0), 2.0);
+    }
+
+    /// The depth of a syntax tree (a leaf is 1).
+    fn tree_depth(node: &Node) -> usize {
+        1 + match node {
+            Node::Number(_) | Node::Variable(_) => 0,
+            Node::Negate(a) => tree_depth(a),
+            Node::Chain(first, rest) => rest
+                .iter()
+                .map(|(_, a)| tree_depth(a))
+                .fold(tree_depth(first), usize::max),
+            Node::Power(a, b) => tree_depth(a).max(tree_depth(b)),
+            Node::Call(_, args) => args.iter().map(tree_depth).max().unwrap_or(0),
+        }
+    }
+
+    fn tree(text: &str) -> Node {
+        let mut allowed = [false; VARIABLES.len()];
+        allowed[..SPACE_TIME].fill(true);
+        Parser::new(text, allowed).unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn chains_are_flat_and_the_depth_is_bounded_by_the_nesting() {
+        // 2000 terms: one chain of leaves, not a tree 2000 deep.
+        let sum = vec!["x"; 2000].join("+");
+        assert_eq!(tree_depth(&tree(&sum)), 2);
+        let mixed = vec!["x*y/z"; 500].join("-");
+        assert_eq!(tree_depth(&tree(&mixed)), 3);
+        assert_eq!(Expression::parse(&sum).unwrap().eval([1.0, 0.0, 0.0], 0.0), 2000.0);
+        // The deepest nesting allowed: within 4 levels per nesting level.
+        let mut deepest = "x".to_string();
+        for _ in 0..MAX_EXPRESSION_DEPTH - 1 {
+            deepest = format!("sin(x*{deepest}+1)^2");
+        }
+        let depth = tree_depth(&tree(&deepest));
+        assert!(depth <= 4 * (MAX_EXPRESSION_DEPTH + 1), "{depth}");
+        assert!(depth > 3 * MAX_EXPRESSION_DEPTH, "{depth}: the test reaches the bound");
     }
 
     #[test]
