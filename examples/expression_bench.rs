@@ -6,7 +6,10 @@
 //!
 //! 1. ns per [`Expression::eval`] of `-20*t*y/sqrt(x^2+y^2)` and `800*t` (2·10⁶ points, best of
 //!    5), next to the same formulas written in Rust;
-//! 2. the time of one [`Load::add_to`] on `mesh::rectangle(40, 10, 256, 64)` (16 705 nodes,
+//! 2. ns per evaluation of sums `x+y+x+y+…` and products `x*y*x*y*…` of n = 64, 256, 1024
+//!    and 2000 terms (2000 terms are 3999 bytes, within the 4096-byte limit): the cost should
+//!    grow linearly with n;
+//! 3. the time of one [`Load::add_to`] on `mesh::rectangle(40, 10, 256, 64)` (16 705 nodes,
 //!    32 768 triangles) for a body force depending on x and t (quadrature on every call), on t
 //!    only (a cached unit load scaled per step), and constant (a cached vector added).
 //!
@@ -61,6 +64,24 @@ fn main() {
             ours / n as f64 * 1e9,
             rust / n as f64 * 1e9
         );
+    }
+
+    println!("scaling, ns per call (and per term) for n terms:");
+    let few = &points[..20_000];
+    for n in [64, 256, 1024, 2000] {
+        let mut row = format!("  n = {n:4}");
+        for op in ["+", "*"] {
+            let text = (0..n).map(|k| ["x", "y"][k % 2]).collect::<Vec<_>>().join(op);
+            let e = Expression::parse(&text).expect("within the limits");
+            let mut sum = 0.0;
+            let seconds = best_of(5, || {
+                sum = few.iter().map(|(x, t)| e.eval(black_box(*x), black_box(*t))).sum();
+            });
+            black_box(sum);
+            let ns = seconds / few.len() as f64 * 1e9;
+            row += &format!("   {op} {ns:9.0} ({:5.2})", ns / n as f64);
+        }
+        println!("{row}");
     }
 
     let mesh = mesh::rectangle(40.0, 10.0, 256, 64);

@@ -56,7 +56,8 @@ fn paper_table(dir: &Path) -> PathBuf {
 }
 
 /// The paper's law three ways on one path: built in, as an expression (to 10⁻¹²; measured:
-/// bit for bit, the Newton slope from exmex's symbolic derivative included) and as a
+/// bit for bit with exmex's symbolic derivative as the Newton slope; to 10⁻¹² with the automatic
+/// derivative that replaced it) and as a
 /// piecewise-linear table 5·10⁻⁵ apart (interpolation error h²/8 · max|μ''| = 2.5·10⁻⁶ of
 /// μ(0); measured: 10⁻⁹ in 2D, 3·10⁻⁸ in 3D, relative).
 fn the_paper_law_three_ways(base: Option<&str>, overrides: &[&str], tag: &str) {

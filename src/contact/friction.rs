@@ -149,15 +149,14 @@ impl FrictionLaw for TabulatedFriction {
     }
 }
 
-/// μ(r) as an expression of the slip rate r and of x, y, z, t. Its derivative in r is exmex's
-/// symbolic one ([`Expression::derivative`]); for an expression with `abs`, `min`, `max` or
-/// `atan2`, which exmex does not differentiate, a central difference with step
-/// h = 10⁻⁶ (1 + r) (one-sided from 0 below h), accurate to about 10⁻¹⁰ relative on smooth
-/// laws (`tests`).
+/// μ(r) as an expression of the slip rate r and of x, y, z, t. Its derivative in r is exact:
+/// forward-mode automatic differentiation of the expression ([`Expression::derivative`]), for
+/// every function, `abs` (0 at its kink), `min`, `max` (the first argument's derivative on a
+/// tie) and `atan2` included.
 #[derive(Debug, Clone)]
 pub struct ExpressionFriction {
     coefficient: Expression,
-    derivative: Option<Expression>,
+    derivative: Expression,
 }
 
 impl ExpressionFriction {
@@ -180,11 +179,6 @@ impl ExpressionFriction {
         self.coefficient.eval_with(at.x, at.t, [r, 0.0])
     }
 
-    /// Whether μ′ is symbolic (not a difference).
-    pub fn symbolic_derivative(&self) -> bool {
-        self.derivative.is_some()
-    }
-
     /// The expression's text.
     pub fn text(&self) -> &str {
         self.coefficient.text()
@@ -196,15 +190,7 @@ impl FrictionLaw for ExpressionFriction {
         scale * self.mu(at, r)
     }
     fn bound_derivative(&self, scale: f64, at: &LawPoint, r: f64) -> f64 {
-        let slope = match &self.derivative {
-            Some(d) => d.eval_with(at.x, at.t, [r, 0.0]),
-            None => {
-                let h = 1e-6 * (1.0 + r);
-                let below = (r - h).max(0.0);
-                (self.mu(at, r + h) - self.mu(at, below)) / (r + h - below)
-            }
-        };
-        scale * slope
+        scale * self.derivative.eval_with(at.x, at.t, [r, 0.0])
     }
     /// ∫₀^r by Gauss–Legendre (5 points) on 16 equal panels.
     fn potential(&self, scale: f64, at: &LawPoint, r: f64) -> f64 {
@@ -357,7 +343,6 @@ mod tests {
     #[test]
     fn the_paper_law_as_an_expression_and_a_table() {
         let expression = ExpressionFriction::parse("(1 - 0.2)*exp(-100*r) + 0.2").unwrap();
-        assert!(expression.symbolic_derivative());
         let rates: Vec<f64> = (0..=8000).map(|k| 0.4 * k as f64 / 8000.0).collect();
         let mu = rates.iter().map(|&r| PAPER.bound(1.0, &AT, r)).collect();
         let table = TabulatedFriction {
@@ -376,14 +361,14 @@ mod tests {
         }
         // Beyond the table's last rate (0.4) μ stays at its last value.
         assert_eq!(table.bound(S, &AT, 5.0), table.bound(S, &AT, 0.4));
-        // The difference quotient where exmex has no derivative (abs): still accurate.
+        // abs, which exmex did not differentiate: the exact slope for r > 0, and 0 at the kink.
         let kinked = ExpressionFriction::parse("0.8*exp(-100*abs(r)) + 0.2").unwrap();
-        assert!(!kinked.symbolic_derivative());
-        for r in [0.0, 0.002, 0.03] {
+        for r in [1e-9, 0.002, 0.03, 0.3] {
             let slope = PAPER.bound_derivative(S, &AT, r);
             let error = (kinked.bound_derivative(S, &AT, r) - slope).abs();
-            assert!(error <= 1e-4 * slope.abs(), "{r}: {error}");
+            assert!(error <= 1e-14 * slope.abs(), "{r}: {error}");
         }
+        assert_eq!(kinked.bound_derivative(S, &AT, 0.0), 0.0);
     }
 
     #[test]

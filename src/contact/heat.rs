@@ -157,12 +157,12 @@ impl FrictionalHeating for LinearHeating {
     }
 }
 
-/// h_τ(x, t, r) as an expression of r and x, y, z, t; its r-derivative by exmex, or a central
-/// difference as [`super::ExpressionFriction`]'s.
+/// h_τ(x, t, r) as an expression of r and x, y, z, t; its r-derivative exact, by automatic
+/// differentiation as [`super::ExpressionFriction`]'s.
 #[derive(Debug, Clone)]
 pub struct ExpressionHeating {
     value: Expression,
-    derivative: Option<Expression>,
+    derivative: Expression,
 }
 
 impl ExpressionHeating {
@@ -179,14 +179,7 @@ impl FrictionalHeating for ExpressionHeating {
         self.value.eval_with(at.x, at.t, [r, 0.0])
     }
     fn heat_derivative(&self, at: &LawPoint, r: f64) -> f64 {
-        match &self.derivative {
-            Some(d) => d.eval_with(at.x, at.t, [r, 0.0]),
-            None => {
-                let h = 1e-6 * (1.0 + r);
-                let below = (r - h).max(0.0);
-                (self.heat(at, r + h) - self.heat(at, below)) / (r + h - below)
-            }
-        }
+        self.derivative.eval_with(at.x, at.t, [r, 0.0])
     }
 }
 

@@ -1,6 +1,6 @@
 //! Expressions of x, y, z, t: parsed and checked once, evaluated many times.
 //!
-//! ## Why exmex, measured
+//! ## The crates we measured, and why we now evaluate ourselves
 //!
 //! Candidates on crates.io, timed with `-20*t*y/sqrt(x^2+y^2)` and `800*t` compiled once and
 //! evaluated at 2·10⁶ points (release build, best of 5, the shared 2-core machine with other
@@ -14,21 +14,33 @@
 //! | meval | 0.2.0 | 136 | 41 | no: last release 2018; its `nom` 1 is flagged for future rejection by rustc | — |
 //! | evalexpr | 13.1.0 | 900 | 310 | yes, but AGPL-3.0-only since 12 (we are MIT OR Apache-2.0) | functions are `math::sqrt`, … |
 //!
-//! exmex is chosen: maintained, licensed like us, allocation-free, thread-safe, and within 35 %
-//! of the fastest candidate. Through [`Expression`], which writes the square of a variable as a
-//! product (exmex's `^` is `powf`), the first expression takes 55 ns and `800*t` 27 ns
-//! (`cargo run --release --example expression_bench`). Speed matters less than it seems: a load
-//! whose datum does not depend on x is never evaluated at quadrature points ([`super::Load`]).
+//! exmex was chosen first, and evaluated the canonical text our own grammar (below) wrote for it:
+//! 55 ns and 27 ns through [`Expression`]. Two costs of it grew faster than the formula
+//! (issue 26): its flat evaluator finds each operator's operands by scanning a bitset of the
+//! ones already used, so one evaluation is O(n²) in the number n of operators (dev build,
+//! `x+x+…+x`: 8.2 µs for 512 terms, 29 µs for 1024, 84 µs for 2000; a body force near the
+//! 4096-byte limit cost 8 s per step on a 32k-triangle mesh), and its symbolic `partial` of
+//! a product of n factors has n² of them (and it could not differentiate `abs`, `min`, `max`,
+//! `atan2`). The grammar was already ours, so the evaluator now is too: the syntax tree is
+//! compiled once to a postfix program for a small stack machine, evaluated in time linear in
+//! its length, with the values on the stack (no allocation) up to a stack depth of 32;
+//! derivatives are forward-mode automatic differentiation over the same program (dual
+//! numbers), linear as well. Figures: `cargo run --release --example expression_bench`
+//! (its scaling table: the cost per term stays flat from 64 to 2000 terms).
 //!
-//! ## Why our own grammar in front of it
+//! The arithmetic is exactly exmex's, operation for operation, so values are bit-identical to
+//! the ones exmex gave: `+ - * /` of f64 left to right, `^` is `powf` except that the square of
+//! a variable `x^2` is the product x·x (as exact: both are x² correctly rounded), unary minus
+//! is negation, `log` and `ln` are `f64::ln`, `min`, `max`, `atan2` are f64's, and a subtree
+//! without variables is folded at compile time with the same operations.
+//!
+//! ## Why our own grammar
 //!
 //! exmex (and mathexpr) bind unary minus tighter than `^`: `-x^2` is (−x)², so `exp(-x^2)`
 //! would silently be exp(x²). exmex also reads `2^3^2` as (2³)², takes any unknown name for a
 //! variable, and has no exponent in number literals (`1e-3`). So [`Expression::parse`] parses the
-//! text itself with the usual precedence (the one of MOOSE's ParsedFunction and of Python),
-//! names unknown variables and functions, and hands exmex a fully parenthesized canonical text
-//! that exmex compiles once and evaluates. exmex never parses user text directly, and no other
-//! module sees it.
+//! text itself with the usual precedence (the one of MOOSE's ParsedFunction and of Python) and
+//! names unknown variables and functions.
 //!
 //! ## Grammar
 //!
@@ -43,11 +55,19 @@
 //! Variables `x y z t`; constants `pi`, `e`; functions `sin cos tan asin acos atan sinh cosh
 //! tanh exp log ln log10 sqrt abs` (one argument; `log` is the natural logarithm, as in
 //! ParsedFunction and FEniCS) and `min max atan2` (two). So `-x^2` = −(x²) and `2^-1` = ½.
+//!
+//! ## Derivatives
+//!
+//! [`Expression::derivative`] carries (value, ∂/∂v) pairs through the program: the usual rules,
+//! `a^b` as b·a^(b−1)·a′ + a^b·ln(a)·b′ with the first term left out where a′ = 0 and the
+//! second where b′ = 0 (so a negative base with a constant exponent has its derivative),
+//! `abs` as sign(a)·a′ with 0 at a = 0, `min` and `max` the derivative of the argument they
+//! return (of the first on a tie), `atan2(a, b)` as (b a′ − a b′)/(a² + b²). A part of the
+//! expression that does not depend on v has derivative exactly 0, even where its value is
+//! infinite or NaN (`sqrt(x)*r` at x = 0 has the r-derivative 0, not NaN).
 
 use std::fmt;
-
-use exmex::prelude::*;
-use exmex::{literal_matcher_from_pattern, FloatOpsFactory, MatchLiteral};
+use std::sync::Arc;
 
 /// Every variable an expression may use: the point (x, y, z) and t, which every expression
 /// may use, then the arguments of the laws on Γ_C, which only the laws allow
@@ -57,37 +77,30 @@ const VARIABLES: [&str; 6] = ["x", "y", "z", "t", "r", "theta"];
 /// The number of variables every expression may use (x, y, z, t).
 const SPACE_TIME: usize = 4;
 
-/// The functions of the grammar: our name, exmex's name, number of arguments.
-const FUNCTIONS: [(&str, &str, usize); 18] = [
-    ("sin", "sin", 1),
-    ("cos", "cos", 1),
-    ("tan", "tan", 1),
-    ("asin", "asin", 1),
-    ("acos", "acos", 1),
-    ("atan", "atan", 1),
-    ("sinh", "sinh", 1),
-    ("cosh", "cosh", 1),
-    ("tanh", "tanh", 1),
-    ("exp", "exp", 1),
-    ("log", "ln", 1),
-    ("ln", "ln", 1),
-    ("log10", "log10", 1),
-    ("sqrt", "sqrt", 1),
-    ("abs", "abs", 1),
-    ("min", "min", 2),
-    ("max", "max", 2),
-    ("atan2", "atan2", 2),
+/// The functions of the grammar: name, instruction, number of arguments.
+const FUNCTIONS: [(&str, Op, usize); 18] = [
+    ("sin", Op::Sin, 1),
+    ("cos", Op::Cos, 1),
+    ("tan", Op::Tan, 1),
+    ("asin", Op::Asin, 1),
+    ("acos", Op::Acos, 1),
+    ("atan", Op::Atan, 1),
+    ("sinh", Op::Sinh, 1),
+    ("cosh", Op::Cosh, 1),
+    ("tanh", Op::Tanh, 1),
+    ("exp", Op::Exp, 1),
+    ("log", Op::Ln, 1),
+    ("ln", Op::Ln, 1),
+    ("log10", Op::Log10, 1),
+    ("sqrt", Op::Sqrt, 1),
+    ("abs", Op::Abs, 1),
+    ("min", Op::Min, 2),
+    ("max", Op::Max, 2),
+    ("atan2", Op::Atan2, 2),
 ];
 
 /// Named constants, replaced by their values at parse time.
 const CONSTANTS: [(&str, f64); 2] = [("pi", std::f64::consts::PI), ("e", std::f64::consts::E)];
-
-// exmex's default literals have no exponent; the canonical text writes numbers with Rust's
-// shortest round-trip formatting (`{:?}`), which uses one for very small and large values.
-literal_matcher_from_pattern!(FloatLiteral, r"^[0-9]+(\.[0-9]+)?([eE][+-]?[0-9]+)?");
-
-/// exmex's compiled form with its default float operators and our literals.
-type Compiled = FlatEx<f64, FloatOpsFactory<f64>, FloatLiteral>;
 
 /// The longest expression text, in bytes: a datum or a law is a formula, not data (a longer
 /// text would build a syntax tree too deep for the stack).
@@ -99,7 +112,7 @@ pub const MAX_EXPRESSION_DEPTH: usize = 100;
 /// Errors of [`Expression::parse`]; each names the text it is about.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExpressionError {
-    /// The text is not an expression of the grammar (or exmex refused the canonical form).
+    /// The text is not an expression of the grammar.
     #[error("cannot parse the expression `{text}`: {message}")]
     Parse { text: String, message: String },
     /// A name that is neither a variable nor a constant.
@@ -155,9 +168,11 @@ pub struct Expression {
 enum Body {
     /// No variable occurs: evaluated once at parse time.
     Constant(f64),
-    /// exmex takes the values of the variables it found in alphabetical order (r, t, theta, x,
-    /// y, z); `slots[k]` is the index in [`VARIABLES`] of its k-th one.
-    Compiled { compiled: Box<Compiled>, slots: Vec<usize> },
+    /// The compiled program; `tangent` is `Some(k)` for the derivative in `VARIABLES[k]`.
+    Program {
+        program: Arc<Program>,
+        tangent: Option<usize>,
+    },
 }
 
 impl Expression {
@@ -185,20 +200,9 @@ impl Expression {
         let mut uses = [false; VARIABLES.len()];
         node.mark_variables(&mut uses);
         let body = if uses.iter().any(|&u| u) {
-            let canonical = node.canonical();
-            let parse_error = |e: exmex::ExError| ExpressionError::Parse {
-                text: text.to_string(),
-                message: format!("exmex rejected the canonical form `{canonical}`: {e}"),
-            };
-            let compiled = Compiled::parse(&canonical).map_err(parse_error)?;
-            let slots = compiled
-                .var_names()
-                .iter()
-                .map(|name| VARIABLES.iter().position(|v| v == name).expect("only our variables"))
-                .collect();
-            Body::Compiled {
-                compiled: Box::new(compiled),
-                slots,
+            Body::Program {
+                program: Arc::new(Program::compile(&node)),
+                tangent: None,
             }
         } else {
             Body::Constant(node.value())
@@ -211,28 +215,39 @@ impl Expression {
     }
 
     /// The partial derivative with respect to `variable` (one of x, y, z, t, r, theta), by
-    /// exmex's symbolic differentiation; `None` where the expression uses a function exmex does
-    /// not differentiate (`abs`, `min`, `max`, `atan2`). The derivative takes the same
-    /// arguments as the expression.
-    pub fn derivative(&self, variable: &str) -> Option<Expression> {
-        let k = VARIABLES.iter().position(|v| *v == variable)?;
-        let text = format!("d/d{variable} ({})", self.text);
+    /// forward-mode automatic differentiation (see the module's documentation for the rules
+    /// at the kinks of `abs`, `min`, `max`); 0 if the expression does not use `variable`. The
+    /// derivative takes the same arguments as the expression and costs about twice as much to
+    /// evaluate.
+    ///
+    /// # Panics
+    ///
+    /// If `variable` is none of x, y, z, t, r, theta, or for the derivative of a derivative in a
+    /// variable it uses (second derivatives are not implemented).
+    pub fn derivative(&self, variable: &str) -> Expression {
+        let k = VARIABLES
+            .iter()
+            .position(|v| *v == variable)
+            .unwrap_or_else(|| panic!("`{variable}` is not one of the variables {VARIABLES:?}"));
         let body = match &self.body {
-            Body::Compiled { compiled, slots } if self.uses[k] => {
-                let index = slots.iter().position(|&s| s == k)?;
-                let derivative = compiled.as_ref().clone().partial(index).ok()?;
-                Body::Compiled {
-                    compiled: Box::new(derivative),
-                    slots: slots.clone(),
+            Body::Program { program, tangent } if self.uses[k] => {
+                assert!(
+                    tangent.is_none(),
+                    "second derivatives are not implemented ({})",
+                    self.text
+                );
+                Body::Program {
+                    program: Arc::clone(program),
+                    tangent: Some(k),
                 }
             }
             _ => Body::Constant(0.0),
         };
-        Some(Expression {
-            text,
+        Expression {
+            text: format!("d/d{variable} ({})", self.text),
             body,
             uses: self.uses,
-        })
+        }
     }
 
     /// The value at the point `x` and time `t`. IEEE semantics: `1/0` is +∞, `sqrt(-1)` is NaN
@@ -246,18 +261,14 @@ impl Expression {
     /// temperature, for an expression parsed by [`Expression::parse_with`].
     #[inline]
     pub fn eval_with(&self, x: [f64; 3], t: f64, laws: [f64; 2]) -> f64 {
+        let variables = [x[0], x[1], x[2], t, laws[0], laws[1]];
         match &self.body {
             Body::Constant(value) => *value,
-            Body::Compiled { compiled, slots } => {
-                let all = [x[0], x[1], x[2], t, laws[0], laws[1]];
-                let mut values = [0.0; VARIABLES.len()];
-                for (value, &slot) in values.iter_mut().zip(slots) {
-                    *value = all[slot];
-                }
-                // The slice has exactly the variables exmex found, so evaluation cannot fail;
-                // NaN would surface as a non-finite load rather than a panic.
-                compiled.eval(&values[..slots.len()]).unwrap_or(f64::NAN)
-            }
+            Body::Program { program, tangent: None } => program.value(&variables),
+            Body::Program {
+                program,
+                tangent: Some(k),
+            } => program.derivative(&variables, *k),
         }
     }
 
@@ -299,12 +310,22 @@ impl PartialEq for Expression {
 }
 
 /// The syntax tree of the grammar.
+///
+/// A sum or a product is one [`Node::Chain`], however many terms it has, so the tree is only as
+/// deep as the nesting: a level of [`MAX_EXPRESSION_DEPTH`] (a parenthesis, a sign, a power, a
+/// function's argument) adds at most four nodes (a `Negate`, or a `Power` or `Call`, then the
+/// chains of its operand's `+` and `*`), and the tree is at most 4·(MAX_EXPRESSION_DEPTH + 1)
+/// = 404 nodes deep, which bounds every recursion over it.
 #[derive(Debug)]
 enum Node {
     Number(f64),
     Variable(usize),
     Negate(Box<Node>),
-    Binary(char, Box<Node>, Box<Node>),
+    /// `first op₁ n₁ op₂ n₂ …`, the operators all `+`/`-` or all `*`/`/`, evaluated from the
+    /// left: ((first op₁ n₁) op₂ n₂) …, as a left-associative binary tree would be.
+    Chain(Box<Node>, Vec<(char, Node)>),
+    /// base ^ exponent.
+    Power(Box<Node>, Box<Node>),
     /// Index into [`FUNCTIONS`] and the arguments.
     Call(usize, Vec<Node>),
 }
@@ -315,7 +336,11 @@ impl Node {
             Node::Number(_) => {}
             Node::Variable(k) => uses[*k] = true,
             Node::Negate(a) => a.mark_variables(uses),
-            Node::Binary(_, a, b) => {
+            Node::Chain(first, rest) => {
+                first.mark_variables(uses);
+                rest.iter().for_each(|(_, a)| a.mark_variables(uses));
+            }
+            Node::Power(a, b) => {
                 a.mark_variables(uses);
                 b.mark_variables(uses);
             }
@@ -323,71 +348,366 @@ impl Node {
         }
     }
 
-    /// Fully parenthesized text in exmex's syntax: every precedence decision is ours.
-    fn canonical(&self) -> String {
+    /// Whether the square of a variable, `x^2`, which is evaluated as the product x·x (as
+    /// exact as `powf`: both are x² correctly rounded, and faster).
+    fn is_square_of_variable(base: &Node, exponent: &Node) -> bool {
+        matches!(base, Node::Variable(_)) && matches!(exponent, Node::Number(v) if *v == 2.0)
+    }
+
+    /// Appends the postfix instructions of the tree to `ops`, one per number, variable,
+    /// operator and function (none for parentheses), so the program is never longer than the
+    /// text has tokens.
+    fn compile(&self, ops: &mut Vec<Op>) {
         match self {
-            Node::Number(v) => format!("{v:?}"),
-            Node::Variable(k) => VARIABLES[*k].to_string(),
-            Node::Negate(a) => format!("(-({}))", a.canonical()),
-            // exmex's `^` is `powf`; a square of a variable is a product, as fast as Rust's and
-            // as exact (both are x² correctly rounded).
-            Node::Binary('^', a, b) if matches!(**a, Node::Variable(_)) && matches!(**b, Node::Number(2.0)) => {
-                let x = a.canonical();
-                format!("({x} * {x})")
+            Node::Number(v) => ops.push(Op::Const(*v)),
+            Node::Variable(k) => ops.push(Op::Var(*k)),
+            Node::Negate(a) => {
+                a.compile(ops);
+                emit(ops, Op::Neg);
             }
-            Node::Binary(op, a, b) => format!("(({}) {op} ({}))", a.canonical(), b.canonical()),
-            Node::Call(f, args) => {
-                let name = FUNCTIONS[*f].1;
-                match args.as_slice() {
-                    [a] => format!("{name}({})", a.canonical()),
-                    // exmex's two-argument functions are binary operators: `(a) min (b)`.
-                    [a, b] => format!("(({}) {name} ({}))", a.canonical(), b.canonical()),
-                    _ => unreachable!("arity checked by the parser"),
+            Node::Chain(first, rest) => {
+                first.compile(ops);
+                for (op, a) in rest {
+                    a.compile(ops);
+                    emit(ops, Op::of_symbol(*op));
                 }
+            }
+            Node::Power(a, b) if Node::is_square_of_variable(a, b) => {
+                a.compile(ops);
+                ops.push(Op::Square);
+            }
+            Node::Power(a, b) => {
+                a.compile(ops);
+                b.compile(ops);
+                emit(ops, Op::Pow);
+            }
+            Node::Call(f, args) => {
+                args.iter().for_each(|a| a.compile(ops));
+                emit(ops, FUNCTIONS[*f].1);
             }
         }
     }
 
-    /// The value of a tree without variables.
+    /// The value of a tree without variables, with the program's arithmetic.
     fn value(&self) -> f64 {
         match self {
             Node::Number(v) => *v,
             Node::Variable(_) => unreachable!("only called on constant trees"),
-            Node::Negate(a) => -a.value(),
-            Node::Binary(op, a, b) => {
-                let (a, b) = (a.value(), b.value());
-                match op {
-                    '+' => a + b,
-                    '-' => a - b,
-                    '*' => a * b,
-                    '/' => a / b,
-                    _ => a.powf(b),
+            Node::Negate(a) => Op::Neg.unary(a.value()),
+            Node::Chain(first, rest) => rest
+                .iter()
+                .fold(first.value(), |a, (op, b)| Op::of_symbol(*op).binary(a, b.value())),
+            Node::Power(a, b) => Op::Pow.binary(a.value(), b.value()),
+            Node::Call(f, args) => match args.as_slice() {
+                [a] => FUNCTIONS[*f].1.unary(a.value()),
+                [a, b] => FUNCTIONS[*f].1.binary(a.value(), b.value()),
+                _ => unreachable!("arity checked by the parser"),
+            },
+        }
+    }
+}
+
+/// Appends `op` to the program, folding it when its operands are constants (the same
+/// operation on the same values as at evaluation, so the same bits).
+fn emit(ops: &mut Vec<Op>, op: Op) {
+    match (op.arity(), ops.as_slice()) {
+        (1, [.., Op::Const(a)]) => {
+            let value = op.unary(*a);
+            ops.pop();
+            ops.push(Op::Const(value));
+        }
+        (2, [.., Op::Const(a), Op::Const(b)]) => {
+            let value = op.binary(*a, *b);
+            ops.truncate(ops.len() - 2);
+            ops.push(Op::Const(value));
+        }
+        _ => ops.push(op),
+    }
+}
+
+/// One instruction of the stack machine.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Op {
+    /// Pushes a number.
+    Const(f64),
+    /// Pushes the value of `VARIABLES[k]`.
+    Var(usize),
+    /// a·a of the top (the square of a variable).
+    Square,
+    Neg,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+    Exp,
+    Ln,
+    Log10,
+    Sqrt,
+    Abs,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    Min,
+    Max,
+    Atan2,
+}
+
+impl Op {
+    /// The operator of a chain.
+    fn of_symbol(symbol: char) -> Op {
+        match symbol {
+            '+' => Op::Add,
+            '-' => Op::Sub,
+            '*' => Op::Mul,
+            '/' => Op::Div,
+            other => unreachable!("`{other}` is not a chain's operator"),
+        }
+    }
+
+    /// How many values it pops (0 for the pushes).
+    fn arity(self) -> usize {
+        match self {
+            Op::Const(_) | Op::Var(_) => 0,
+            Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Pow | Op::Min | Op::Max | Op::Atan2 => 2,
+            _ => 1,
+        }
+    }
+
+    /// The value of a one-argument instruction.
+    #[inline(always)]
+    fn unary(self, a: f64) -> f64 {
+        match self {
+            Op::Square => a * a,
+            Op::Neg => -a,
+            Op::Sin => a.sin(),
+            Op::Cos => a.cos(),
+            Op::Tan => a.tan(),
+            Op::Asin => a.asin(),
+            Op::Acos => a.acos(),
+            Op::Atan => a.atan(),
+            Op::Sinh => a.sinh(),
+            Op::Cosh => a.cosh(),
+            Op::Tanh => a.tanh(),
+            Op::Exp => a.exp(),
+            Op::Ln => a.ln(),
+            Op::Log10 => a.log10(),
+            Op::Sqrt => a.sqrt(),
+            Op::Abs => a.abs(),
+            _ => unreachable!("{self:?} is not a one-argument instruction"),
+        }
+    }
+
+    /// The value of a two-argument instruction.
+    #[inline(always)]
+    fn binary(self, a: f64, b: f64) -> f64 {
+        match self {
+            Op::Add => a + b,
+            Op::Sub => a - b,
+            Op::Mul => a * b,
+            Op::Div => a / b,
+            Op::Pow => a.powf(b),
+            Op::Min => a.min(b),
+            Op::Max => a.max(b),
+            Op::Atan2 => a.atan2(b),
+            _ => unreachable!("{self:?} is not a two-argument instruction"),
+        }
+    }
+
+    /// The derivative of a one-argument instruction: `a` the argument, `da` its derivative,
+    /// `value` the instruction's value. Only called with `da` ≠ 0.
+    #[inline(always)]
+    fn unary_derivative(self, a: f64, da: f64, value: f64) -> f64 {
+        let slope = match self {
+            Op::Square => 2.0 * a,
+            Op::Neg => -1.0,
+            Op::Sin => a.cos(),
+            Op::Cos => -a.sin(),
+            Op::Tan => 1.0 + value * value,
+            Op::Asin => 1.0 / (1.0 - a * a).sqrt(),
+            Op::Acos => -1.0 / (1.0 - a * a).sqrt(),
+            Op::Atan => 1.0 / (1.0 + a * a),
+            Op::Sinh => a.cosh(),
+            Op::Cosh => a.sinh(),
+            Op::Tanh => 1.0 - value * value,
+            Op::Exp => value,
+            Op::Ln => 1.0 / a,
+            Op::Log10 => 1.0 / (a * std::f64::consts::LN_10),
+            Op::Sqrt => 0.5 / value,
+            // sign(a), 0 at the kink (NaN stays NaN).
+            Op::Abs if a == 0.0 => 0.0,
+            Op::Abs => a.signum(),
+            _ => unreachable!("{self:?} is not a one-argument instruction"),
+        };
+        slope * da
+    }
+
+    /// The derivative of a two-argument instruction of value `value`, not both `da` and `db`
+    /// zero. A zero derivative's term is left out (0·∞ would be NaN).
+    #[inline(always)]
+    fn binary_derivative(self, (a, da): (f64, f64), (b, db): (f64, f64), value: f64) -> f64 {
+        let times = |d: f64, factor: f64| if d == 0.0 { 0.0 } else { d * factor };
+        match self {
+            Op::Add => da + db,
+            Op::Sub => da - db,
+            Op::Mul => times(da, b) + times(db, a),
+            Op::Div => (da - times(db, value)) / b,
+            Op::Pow => {
+                let base = if da == 0.0 { 0.0 } else { b * a.powf(b - 1.0) * da };
+                let exponent = if db == 0.0 { 0.0 } else { value * a.ln() * db };
+                base + exponent
+            }
+            // The derivative of the argument returned: f64::min and max return the other
+            // one when an argument is NaN, and the first on a tie.
+            Op::Min => {
+                if b < a || a.is_nan() {
+                    db
+                } else {
+                    da
                 }
             }
-            Node::Call(f, args) => {
-                let a = args[0].value();
-                match FUNCTIONS[*f].0 {
-                    "sin" => a.sin(),
-                    "cos" => a.cos(),
-                    "tan" => a.tan(),
-                    "asin" => a.asin(),
-                    "acos" => a.acos(),
-                    "atan" => a.atan(),
-                    "sinh" => a.sinh(),
-                    "cosh" => a.cosh(),
-                    "tanh" => a.tanh(),
-                    "exp" => a.exp(),
-                    "log" | "ln" => a.ln(),
-                    "log10" => a.log10(),
-                    "sqrt" => a.sqrt(),
-                    "abs" => a.abs(),
-                    "min" => a.min(args[1].value()),
-                    "max" => a.max(args[1].value()),
-                    "atan2" => a.atan2(args[1].value()),
-                    other => unreachable!("function {other} missing from the constant evaluator"),
+            Op::Max => {
+                if b > a || a.is_nan() {
+                    db
+                } else {
+                    da
+                }
+            }
+            Op::Atan2 => (times(da, b) - times(db, a)) / (a * a + b * b),
+            _ => unreachable!("{self:?} is not a two-argument instruction"),
+        }
+    }
+}
+
+/// The postfix program of an expression and the deepest stack it needs.
+#[derive(Debug)]
+struct Program {
+    ops: Vec<Op>,
+    stack: usize,
+}
+
+impl Program {
+    fn compile(node: &Node) -> Program {
+        let mut ops = Vec::new();
+        node.compile(&mut ops);
+        let (mut depth, mut stack) = (0usize, 0usize);
+        for op in &ops {
+            depth = depth + 1 - op.arity();
+            stack = stack.max(depth);
+        }
+        debug_assert_eq!(depth, 1, "a program leaves one value");
+        Program { ops, stack }
+    }
+
+    /// The value at `variables` (in the order of [`VARIABLES`]).
+    #[inline]
+    fn value(&self, variables: &[f64; VARIABLES.len()]) -> f64 {
+        if self.stack <= 8 {
+            self.run(&mut [0.0; 8], variables)
+        } else if self.stack <= 32 {
+            self.run(&mut [0.0; 32], variables)
+        } else {
+            self.run(&mut vec![0.0; self.stack], variables)
+        }
+    }
+
+    fn run(&self, stack: &mut [f64], variables: &[f64; VARIABLES.len()]) -> f64 {
+        // `n` values on the stack; the compiler guarantees every pop has its operands.
+        let mut n = 0;
+        for &op in &self.ops {
+            match op {
+                Op::Const(v) => {
+                    stack[n] = v;
+                    n += 1;
+                }
+                Op::Var(k) => {
+                    stack[n] = variables[k];
+                    n += 1;
+                }
+                // The frequent instructions spelled out, the others through `Op::binary` and
+                // `Op::unary` (the same arithmetic).
+                Op::Add => {
+                    n -= 1;
+                    stack[n - 1] += stack[n];
+                }
+                Op::Sub => {
+                    n -= 1;
+                    stack[n - 1] -= stack[n];
+                }
+                Op::Mul => {
+                    n -= 1;
+                    stack[n - 1] *= stack[n];
+                }
+                Op::Div => {
+                    n -= 1;
+                    stack[n - 1] /= stack[n];
+                }
+                Op::Square => stack[n - 1] *= stack[n - 1],
+                Op::Neg => stack[n - 1] = -stack[n - 1],
+                Op::Pow | Op::Min | Op::Max | Op::Atan2 => {
+                    n -= 1;
+                    stack[n - 1] = op.binary(stack[n - 1], stack[n]);
+                }
+                _ => stack[n - 1] = op.unary(stack[n - 1]),
+            }
+        }
+        stack[0]
+    }
+
+    /// The derivative in `VARIABLES[tangent]` at `variables`: the program on (value,
+    /// derivative) pairs.
+    fn derivative(&self, variables: &[f64; VARIABLES.len()], tangent: usize) -> f64 {
+        if self.stack <= 8 {
+            self.run_dual(&mut [(0.0, 0.0); 8], variables, tangent)
+        } else if self.stack <= 32 {
+            self.run_dual(&mut [(0.0, 0.0); 32], variables, tangent)
+        } else {
+            self.run_dual(&mut vec![(0.0, 0.0); self.stack], variables, tangent)
+        }
+    }
+
+    fn run_dual(&self, stack: &mut [(f64, f64)], variables: &[f64; VARIABLES.len()], tangent: usize) -> f64 {
+        let mut n = 0;
+        for &op in &self.ops {
+            match op {
+                Op::Const(v) => {
+                    stack[n] = (v, 0.0);
+                    n += 1;
+                }
+                Op::Var(k) => {
+                    stack[n] = (variables[k], if k == tangent { 1.0 } else { 0.0 });
+                    n += 1;
+                }
+                Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Pow | Op::Min | Op::Max | Op::Atan2 => {
+                    n -= 1;
+                    let (a, b) = (stack[n - 1], stack[n]);
+                    let value = op.binary(a.0, b.0);
+                    let derivative = if a.1 == 0.0 && b.1 == 0.0 {
+                        0.0
+                    } else {
+                        op.binary_derivative(a, b, value)
+                    };
+                    stack[n - 1] = (value, derivative);
+                }
+                _ => {
+                    let (a, da) = stack[n - 1];
+                    let value = op.unary(a);
+                    let derivative = if da == 0.0 {
+                        0.0
+                    } else {
+                        op.unary_derivative(a, da, value)
+                    };
+                    stack[n - 1] = (value, derivative);
                 }
             }
         }
+        stack[0].1
     }
 }
 
@@ -504,21 +824,36 @@ impl<'a> Parser<'a> {
     }
 
     fn expr(&mut self) -> Result<Node, ExpressionError> {
-        let mut node = self.term()?;
-        while let Token::Symbol(op @ ('+' | '-')) = self.peek() {
-            self.next += 1;
-            node = Node::Binary(op, Box::new(node), Box::new(self.term()?));
-        }
-        Ok(node)
+        let first = self.term()?;
+        self.chain(first, &['+', '-'], Self::term)
     }
 
     fn term(&mut self) -> Result<Node, ExpressionError> {
-        let mut node = self.unary()?;
-        while let Token::Symbol(op @ ('*' | '/')) = self.peek() {
+        let first = self.unary()?;
+        self.chain(first, &['*', '/'], Self::unary)
+    }
+
+    /// `first` and every further `op operand` with `op` one of `ops`: one [`Node::Chain`]
+    /// (`first` alone if there is none).
+    fn chain(
+        &mut self,
+        first: Node,
+        ops: &[char; 2],
+        mut operand: impl FnMut(&mut Self) -> Result<Node, ExpressionError>,
+    ) -> Result<Node, ExpressionError> {
+        let mut rest = Vec::new();
+        while let Token::Symbol(op) = self.peek() {
+            if !ops.contains(&op) {
+                break;
+            }
             self.next += 1;
-            node = Node::Binary(op, Box::new(node), Box::new(self.unary()?));
+            rest.push((op, operand(self)?));
         }
-        Ok(node)
+        Ok(if rest.is_empty() {
+            first
+        } else {
+            Node::Chain(Box::new(first), rest)
+        })
     }
 
     fn unary(&mut self) -> Result<Node, ExpressionError> {
@@ -555,7 +890,7 @@ impl<'a> Parser<'a> {
             self.next += 1;
             // The exponent is a `unary`, itself ending in a `power`: right associativity.
             let exponent = self.unary()?;
-            return Ok(Node::Binary('^', Box::new(base), Box::new(exponent)));
+            return Ok(Node::Power(Box::new(base), Box::new(exponent)));
         }
         Ok(base)
     }
@@ -704,7 +1039,7 @@ mod tests {
             ("2^-x", |x, _| 2f64.powf(-x[0])),
             ("x - y - z", |x, _| x[0] - x[1] - x[2]),
             ("x / y / 2", |x, _| x[0] / x[1] / 2.0),
-            ("-x*y + -(z)", |x, _| -x[0] * x[1] - x[2]),
+            ("-x*y + -(z)", |x, _| -x[0] * x[1] + -x[2]),
             ("min(x, y) * max(z, 1e-3) + abs(y)", |x, _| {
                 x[0].min(x[1]) * x[2].max(1e-3) + x[1].abs()
             }),
@@ -712,20 +1047,83 @@ mod tests {
                 (std::f64::consts::PI * x[0]).sin() + x[1].cos() * (0.1 * x[2]).tan()
             }),
             ("log(e) + ln(abs(x)+1) + log10(100)", |x, _| {
-                1.0 + (x[0].abs() + 1.0).ln() + 2.0
+                std::f64::consts::E.ln() + (x[0].abs() + 1.0).ln() + 100f64.log10()
             }),
-            ("atan2(y, x) + 1.5E+2 + .5", |x, _| x[1].atan2(x[0]) + 150.5),
+            ("atan2(y, x) + 1.5E+2 + .5", |x, _| x[1].atan2(x[0]) + 150.0 + 0.5),
             ("x**2 + 2*t", |x, t| x[0] * x[0] + 2.0 * t),
         ];
         for (text, reference) in cases {
             for (x, t) in points {
-                let (got, want) = (eval(text, x, t), reference(x, t));
-                assert!(
-                    (got - want).abs() <= 1e-13 * (1.0 + want.abs()),
-                    "{text} at {x:?}, t = {t}: {got} vs {want}"
-                );
+                assert_bits(text, eval(text, x, t), reference(x, t));
             }
         }
+    }
+
+    /// The same bits (any NaN for a NaN).
+    fn assert_bits(text: &str, got: f64, want: f64) {
+        assert!(
+            got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+            "{text}: {got:e} vs {want:e}"
+        );
+    }
+
+    /// The program's arithmetic is Rust's, written the same way, to the bit: precedence,
+    /// chains, powers (x^2 of a variable is x·x, any other power `powf`), every function,
+    /// constants folded.
+    #[test]
+    fn values_are_bit_identical_to_rust() {
+        type Reference = fn([f64; 3], f64) -> f64;
+        let cases: Vec<(&str, Reference)> = vec![
+            ("x + y - z + t - x", |x, t| x[0] + x[1] - x[2] + t - x[0]),
+            ("x * y / z * t / 3", |x, t| x[0] * x[1] / x[2] * t / 3.0),
+            ("x - y*z + t/x - 2*y", |x, t| x[0] - x[1] * x[2] + t / x[0] - 2.0 * x[1]),
+            ("2*3*x + x*2*3", |x, _| 6.0 * x[0] + x[0] * 2.0 * 3.0),
+            ("0.1 + 0.2 + x", |x, _| 0.1 + 0.2 + x[0]),
+            ("x + 0.1 + 0.2", |x, _| x[0] + 0.1 + 0.2),
+            ("-2^2*x", |x, _| -(2f64.powf(2.0)) * x[0]),
+            ("x^2 + (x+1)^2 + x^2.5 + y^x", |x, _| {
+                x[0] * x[0] + (x[0] + 1.0).powf(2.0) + x[0].powf(2.5) + x[1].powf(x[0])
+            }),
+            ("x^(1+1) - x^-1", |x, _| x[0].powf(1.0 + 1.0) - x[0].powf(-1.0)),
+            ("2^3^z + 2^-x", |x, _| 2f64.powf(3f64.powf(x[2])) + 2f64.powf(-x[0])),
+            ("-(-(x))*-y", |x, _| -(-x[0]) * -x[1]),
+            (
+                "sin(x) + cos(y) + tan(z) + asin(x/10) + acos(y/10) + atan(z)",
+                |x, _| x[0].sin() + x[1].cos() + x[2].tan() + (x[0] / 10.0).asin() + (x[1] / 10.0).acos() + x[2].atan(),
+            ),
+            ("sinh(x) * cosh(y) / tanh(z) - exp(t)", |x, t| {
+                x[0].sinh() * x[1].cosh() / x[2].tanh() - t.exp()
+            }),
+            ("log(abs(x)) + ln(abs(y)) + log10(abs(z)) + sqrt(abs(x*y))", |x, _| {
+                x[0].abs().ln() + x[1].abs().ln() + x[2].abs().log10() + (x[0] * x[1]).abs().sqrt()
+            }),
+            ("min(x, y) - max(y, z)*atan2(z, x) + atan2(-1, -x)", |x, _| {
+                x[0].min(x[1]) - x[1].max(x[2]) * x[2].atan2(x[0]) + (-1f64).atan2(-x[0])
+            }),
+            ("sqrt(x)", |x, _| x[0].sqrt()),
+            ("1/(x-x)", |x, _| 1.0 / (x[0] - x[0])),
+            ("pi*e*x", |x, _| std::f64::consts::PI * std::f64::consts::E * x[0]),
+        ];
+        let points = [
+            ([0.3, -1.7, 2.2], 0.7),
+            ([4.0, 0.5, -0.25], 2.5),
+            ([-2.0, 3.0, 1.0], 0.0),
+            ([1e-300, 7.0, -1e10], 1e5),
+        ];
+        for (text, reference) in cases {
+            for (x, t) in points {
+                assert_bits(text, eval(text, x, t), reference(x, t));
+            }
+        }
+        // A long mixed chain, from the left.
+        let text = format!("x*y{}+z/x-t", "+z/x-t+x*y".repeat(59));
+        let ([x, y, z], t) = ([0.3, -1.7, 2.2], 0.7);
+        let mut sum = x * y;
+        for _ in 0..59 {
+            sum = sum + z / x - t + x * y;
+        }
+        sum = sum + z / x - t;
+        assert_bits(&text, eval(&text, [x, y, z], t), sum);
     }
 
     #[test]
@@ -827,40 +1225,167 @@ mod tests {
         assert!(err.to_string().contains("x, y, z, t and r"), "{err}");
     }
 
+    /// ∂/∂r at r = v (θ = 0.9, x = 0.3, t = 0.7).
+    fn slope(f: &Expression, v: f64) -> f64 {
+        f.derivative("r").eval_with([0.3, 0.0, 0.0], 0.7, [v, 0.9])
+    }
+
     #[test]
-    fn symbolic_derivatives_agree_with_differences() {
+    fn derivatives_agree_with_differences() {
         let cases = [
             "0.8*exp(-100*r) + 0.2",
-            "0.5*theta - 5*sin(theta/5)",
+            "0.5*theta - 5*sin(theta/5) + r*theta",
             "x*r^2 + t*sqrt(1 + r)",
             "tanh(3*r)/(1 + r^1.5)",
+            "r^r + 2^r + (r+1)^-2.5 + (-2)^2*r",
+            "sin(r)*cos(r)/tan(r+1) + asin(r/3) + acos(r/4) + atan(r)",
+            "sinh(r) + cosh(r) + log(r) + ln(1+r) + log10(r) + exp(r/x)",
+            "abs(r - 1) + min(r, 1 - r) + max(r*r, 0.5) + atan2(r, 1 - r) + atan2(0.3, r)",
         ];
         for text in cases {
             let f = Expression::parse_with(text, &["r", "theta"]).unwrap();
-            let variable = if f.uses("theta") { "theta" } else { "r" };
-            let df = f.derivative(variable).expect("differentiable");
-            for v in [0.003, 0.4, 2.5] {
-                let at = |v: f64| if variable == "r" { [v, 0.0] } else { [0.0, v] };
+            for v in [0.003, 0.4, 0.9, 2.5] {
+                let at = |v: f64| f.eval_with([0.3, 0.0, 0.0], 0.7, [v, 0.9]);
                 let h = 1e-6 * (1.0 + v);
-                let fd = (f.eval_with([0.3, 0.0, 0.0], 0.7, at(v + h)) - f.eval_with([0.3, 0.0, 0.0], 0.7, at(v - h)))
-                    / (2.0 * h);
-                let exact = df.eval_with([0.3, 0.0, 0.0], 0.7, at(v));
+                let fd = (at(v + h) - at(v - h)) / (2.0 * h);
+                let exact = slope(&f, v);
                 assert!(
                     (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
                     "{text} at {v}: {exact} vs {fd}"
                 );
             }
         }
-        // Constant in r: derivative 0; abs has no symbolic derivative in exmex.
-        let g = Expression::parse_with("x + t", &["r"]).unwrap();
+    }
+
+    #[test]
+    fn derivatives_agree_with_hand_written_ones() {
+        type Rule = fn(f64) -> f64;
+        let cases: Vec<(&str, Rule)> = vec![
+            ("sin(2*r)", |r| 2.0 * (2.0 * r).cos()),
+            ("cos(r)", |r| -r.sin()),
+            ("tan(r)", |r| 1.0 / (r.cos() * r.cos())),
+            ("asin(r/2)", |r| 0.5 / (1.0 - r * r / 4.0).sqrt()),
+            ("acos(r/2)", |r| -0.5 / (1.0 - r * r / 4.0).sqrt()),
+            ("atan(r)", |r| 1.0 / (1.0 + r * r)),
+            ("sinh(r)", |r| r.cosh()),
+            ("cosh(r)", |r| r.sinh()),
+            ("tanh(r)", |r| 1.0 / (r.cosh() * r.cosh())),
+            ("exp(-3*r)", |r| -3.0 * (-3.0 * r).exp()),
+            ("log(r)", |r| 1.0 / r),
+            ("ln(r)", |r| 1.0 / r),
+            ("log10(r)", |r| 1.0 / (r * std::f64::consts::LN_10)),
+            ("sqrt(r)", |r| 0.5 / r.sqrt()),
+            ("abs(r - 0.5)", |r| if r > 0.5 { 1.0 } else { -1.0 }),
+            ("min(r, 0.5)", |r| if r < 0.5 { 1.0 } else { 0.0 }),
+            ("max(r, 0.5)", |r| if r > 0.5 { 1.0 } else { 0.0 }),
+            ("min(0.5, 2*r)", |r| if 2.0 * r < 0.5 { 2.0 } else { 0.0 }),
+            ("atan2(r, 2)", |r| 2.0 / (r * r + 4.0)),
+            ("atan2(2, r)", |r| -2.0 / (r * r + 4.0)),
+            ("r^3", |r| 3.0 * r * r),
+            ("r^2", |r| 2.0 * r),
+            ("3^r", |r| 3f64.powf(r) * 3f64.ln()),
+            ("r^r", |r| r.powf(r) * (r.ln() + 1.0)),
+            ("(r-5)^3", |r| 3.0 * (r - 5.0) * (r - 5.0)),
+            ("1/r", |r| -1.0 / (r * r)),
+            ("r*r*r*r", |r| 4.0 * r * r * r),
+            ("-r/(1+r)", |r| -1.0 / ((1.0 + r) * (1.0 + r))),
+        ];
+        for (text, rule) in cases {
+            let f = Expression::parse_with(text, &["r"]).unwrap();
+            for r in [0.1, 0.3, 0.7, 1.9] {
+                let (got, want) = (slope(&f, r), rule(r));
+                assert!(
+                    (got - want).abs() <= 4e-15 * want.abs().max(1.0),
+                    "{text} at {r}: {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn derivatives_at_the_kinks_and_in_other_variables() {
+        let f = |text: &str| Expression::parse_with(text, &["r", "theta"]).unwrap();
+        // abs: 0 at the kink; min and max: the first argument's derivative on a tie.
+        assert_eq!(slope(&f("abs(r - 0.5)"), 0.5), 0.0);
+        assert_eq!(slope(&f("min(2*r, 1)"), 0.5), 2.0);
+        assert_eq!(slope(&f("min(1, 2*r)"), 0.5), 0.0);
+        assert_eq!(slope(&f("max(3*r, 1.5)"), 0.5), 3.0);
+        // A negative base with a constant exponent.
+        assert!((slope(&f("(r - 2)^3"), 0.5) - 3.0 * 1.5 * 1.5).abs() < 1e-14);
+        assert_eq!(slope(&f("(r - 2)^2"), 0.5), -3.0);
+        // A part that does not depend on r has derivative 0, even where it is infinite.
+        let g = f("sqrt(x - 0.3)*r + log(x - 0.3)");
+        assert_eq!(g.derivative("r").eval_with([0.3, 0.0, 0.0], 0.0, [1.0, 0.0]), 0.0);
+        // Constant in r: the constant 0; the derivative in the other variables.
+        let h = f("x*y + t*theta^2");
+        assert_eq!(h.derivative("r").eval_with([1.0, 2.0, 0.0], 1.0, [0.5, 3.0]), 0.0);
+        assert!(matches!(h.derivative("r").body, Body::Constant(v) if v == 0.0));
+        assert_eq!(h.derivative("theta").eval_with([1.0, 2.0, 0.0], 1.5, [0.5, 3.0]), 9.0);
+        assert_eq!(h.derivative("y").eval_with([1.5, 2.0, 0.0], 1.5, [0.5, 3.0]), 1.5);
+        assert_eq!(h.derivative("t").text(), "d/dt (x*y + t*theta^2)");
+        assert_eq!(Expression::parse("7").unwrap().derivative("x").eval([0.0; 3], 0.0), 0.0);
+    }
+
+    #[test]
+    #[should_panic(expected = "not one of the variables")]
+    fn derivative_in_an_unknown_variable_panics() {
+        Expression::parse("x").unwrap().derivative("q");
+    }
+
+    /// The program has at most one instruction per token and needs a stack as deep as the
+    /// nesting (plus one per pending operand), not as long as the chains: evaluation is
+    /// linear in the text.
+    #[test]
+    fn programs_are_linear_in_the_text() {
+        let program = |text: &str| match Expression::parse(text).unwrap().body {
+            Body::Program { program, .. } => program,
+            Body::Constant(_) => panic!("{text} is constant"),
+        };
+        for n in [64, 1000, 2000] {
+            for op in ["+", "*", "-", "/"] {
+                let text = vec!["x"; n].join(op);
+                let p = program(&text);
+                assert_eq!((p.ops.len(), p.stack), (2 * n - 1, 2), "{op} {n}");
+            }
+        }
+        let p = program(&vec!["x*y+z"; 600].join("-"));
+        // Five instructions per `x*y+z`, one per `-` between them.
+        assert_eq!((p.ops.len(), p.stack), (6 * 600 - 1, 3));
+        // Parenthesized from the right: the stack grows with the nesting (bounded by it).
+        let nested = format!("{}x{}", "(x+".repeat(90), ")".repeat(90));
+        assert_eq!(program(&nested).stack, 91);
+        // Constants are folded: `-20` and `2*3` are one instruction each.
+        let p = program("-20*t*2*3 + 2*3*x");
         assert_eq!(
-            g.derivative("r").unwrap().eval_with([1.0, 0.0, 0.0], 1.0, [0.5, 0.0]),
-            0.0
+            p.ops,
+            [
+                Op::Const(-20.0),
+                Op::Var(3),
+                Op::Mul,
+                Op::Const(2.0),
+                Op::Mul,
+                Op::Const(3.0),
+                Op::Mul,
+                Op::Const(6.0),
+                Op::Var(0),
+                Op::Mul,
+                Op::Add
+            ]
         );
-        assert!(Expression::parse_with("abs(r - 1)", &["r"])
-            .unwrap()
-            .derivative("r")
-            .is_none());
+    }
+
+    #[test]
+    fn long_chains_parse_evaluate_and_differentiate() {
+        let sum = Expression::parse_with(&vec!["r"; 2000].join("+"), &["r"]).unwrap();
+        assert_eq!(sum.eval_with([0.0; 3], 0.0, [1.5, 0.0]), 3000.0);
+        assert_eq!(slope(&sum, 1.5), 2000.0);
+        let product = Expression::parse_with(&vec!["r"; 2000].join("*"), &["r"]).unwrap();
+        assert_eq!(product.eval_with([0.0; 3], 0.0, [1.0, 0.0]), 1.0);
+        assert_eq!(slope(&product, 1.0), 2000.0);
+        // Beyond a stack of 32: the heap.
+        let nested = Expression::parse_with(&format!("{}r{}", "(r*".repeat(60), ")".repeat(60)), &["r"]).unwrap();
+        assert_eq!(nested.eval_with([0.0; 3], 0.0, [1.0, 0.0]), 1.0);
+        assert_eq!(slope(&nested, 1.0), 61.0);
     }
 
     #[test]
@@ -882,6 +1407,44 @@ mod tests {
         assert_eq!(Expression::parse(&sum).unwrap().eval([1.0, 0.0, 0.0], 0.0), 1500.0);
         let fifty = format!("{}x{}", "(".repeat(50), ")".repeat(50));
         assert_eq!(Expression::parse(&fifty).unwrap().eval([2.0, 0.0, 0.0], 0.0), 2.0);
+    }
+
+    /// The depth of a syntax tree (a leaf is 1).
+    fn tree_depth(node: &Node) -> usize {
+        1 + match node {
+            Node::Number(_) | Node::Variable(_) => 0,
+            Node::Negate(a) => tree_depth(a),
+            Node::Chain(first, rest) => rest
+                .iter()
+                .map(|(_, a)| tree_depth(a))
+                .fold(tree_depth(first), usize::max),
+            Node::Power(a, b) => tree_depth(a).max(tree_depth(b)),
+            Node::Call(_, args) => args.iter().map(tree_depth).max().unwrap_or(0),
+        }
+    }
+
+    fn tree(text: &str) -> Node {
+        let mut allowed = [false; VARIABLES.len()];
+        allowed[..SPACE_TIME].fill(true);
+        Parser::new(text, allowed).unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn chains_are_flat_and_the_depth_is_bounded_by_the_nesting() {
+        // 2000 terms: one chain of leaves, not a tree 2000 deep.
+        let sum = vec!["x"; 2000].join("+");
+        assert_eq!(tree_depth(&tree(&sum)), 2);
+        let mixed = vec!["x*y/z"; 500].join("-");
+        assert_eq!(tree_depth(&tree(&mixed)), 3);
+        assert_eq!(Expression::parse(&sum).unwrap().eval([1.0, 0.0, 0.0], 0.0), 2000.0);
+        // The deepest nesting allowed: within 4 levels per nesting level.
+        let mut deepest = "x".to_string();
+        for _ in 0..MAX_EXPRESSION_DEPTH - 1 {
+            deepest = format!("sin(x*{deepest}+1)^2");
+        }
+        let depth = tree_depth(&tree(&deepest));
+        assert!(depth <= 4 * (MAX_EXPRESSION_DEPTH + 1), "{depth}");
+        assert!(depth > 3 * MAX_EXPRESSION_DEPTH, "{depth}: the test reaches the bound");
     }
 
     #[test]
