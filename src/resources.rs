@@ -68,23 +68,6 @@ pub fn peak_memory_mib() -> Option<f64> {
     Some(kib / 1024.0)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The estimate is within 1.5× of the peaks measured on this machine.
-    #[test]
-    fn the_estimate_matches_the_measured_peaks() {
-        const MIB: f64 = (1u64 << 20) as f64;
-        for (dim, unknowns, measured_mib) in [(2, 49_344.0, 164.0), (3, 46_970.0, 1_050.0)] {
-            let ratio = estimated_memory(dim, unknowns) / (measured_mib * MIB);
-            assert!((1.0 / 1.5..=1.5).contains(&ratio), "{dim}D, {unknowns}: ratio {ratio}");
-        }
-        assert!(estimated_memory(3, 1e6) > estimated_memory(3, 5e5) * 2.0);
-        assert_eq!(human(3.0 * (1u64 << 30) as f64), "3.0 GiB");
-    }
-}
-
 /// Reads an input file (a scenario, a mesh, a table, a checkpoint) of at most `max_bytes`:
 /// regular files only (a FIFO would block forever, a device such as /dev/zero never end), and
 /// never more than `max_bytes`, even when the file grows while it is read. The errors are
@@ -119,4 +102,21 @@ pub fn read_input(path: &std::path::Path, max_bytes: u64) -> std::io::Result<Vec
 /// is unknown), since reading holds the file and a few times its size while the mesh is built.
 pub fn max_data_file_bytes() -> u64 {
     machine_memory().map_or(4 << 30, |m| (m / 8.0) as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The estimate is within 1.5× of the peaks measured on this machine.
+    #[test]
+    fn the_estimate_matches_the_measured_peaks() {
+        const MIB: f64 = (1u64 << 20) as f64;
+        for (dim, unknowns, measured_mib) in [(2, 49_344.0, 164.0), (3, 46_970.0, 1_050.0)] {
+            let ratio = estimated_memory(dim, unknowns) / (measured_mib * MIB);
+            assert!((1.0 / 1.5..=1.5).contains(&ratio), "{dim}D, {unknowns}: ratio {ratio}");
+        }
+        assert!(estimated_memory(3, 1e6) > estimated_memory(3, 5e5) * 2.0);
+        assert_eq!(human(3.0 * (1u64 << 30) as f64), "3.0 GiB");
+    }
 }

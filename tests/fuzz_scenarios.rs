@@ -1,5 +1,7 @@
-//! Input that cannot crash it: a seeded generator of mutated scenarios. Every case must end in a
-//! clean error naming a key, or in a run whose figures are finite; never a panic.
+//! Input that cannot crash it: a seeded generator of mutated scenarios (values of every type at
+//! their extremes, expressions at and beyond their length and nesting limits). Every case must
+//! end in a clean error naming a key, or in a run whose figures are finite; never a panic. The
+//! Gmsh reader has its own generator: `tests/fuzz_meshes.rs`.
 //!
 //! 300 cases here (seconds); for a deeper run,
 //! `THERMOCONTACT_FUZZ_CASES=100000 cargo test --release --test fuzz_scenarios`
@@ -68,16 +70,31 @@ fn value(rng: &mut Rng) -> Value {
         "((((",
         "1e-3*x",
     ];
-    match rng.below(7) {
+    match rng.below(8) {
         0 | 1 => Value::Float(*rng.pick(&floats)),
         2 => Value::Integer(*rng.pick(&ints)),
         3 => Value::String(rng.pick(&strings).to_string()),
+        7 => Value::String(expression(rng)),
         4 => Value::Boolean(rng.below(2) == 0),
         5 => {
             let n = rng.pick(&[0usize, 1, 2, 3, 4]);
             Value::Array((0..*n).map(|_| Value::Float(*rng.pick(&floats))).collect())
         }
         _ => Value::Table(Table::from_iter([("law".to_string(), Value::String("tresca".into()))])),
+    }
+}
+
+/// Expressions at the edges of their limits (4096 bytes, nesting 100): deep parentheses, signs
+/// and powers, long sums and products, just under and over each limit and far beyond.
+fn expression(rng: &mut Rng) -> String {
+    let depth = *rng.pick(&[10usize, 99, 100, 101, 9_000]);
+    let terms = *rng.pick(&[10usize, 1_000, 2_047, 2_049, 52_000]);
+    match rng.below(5) {
+        0 => format!("{}x{}", "(".repeat(depth), ")".repeat(depth)),
+        1 => format!("{}x", "-".repeat(depth)),
+        2 => vec!["x"; depth].join("^"),
+        3 => vec!["x"; terms].join("+"),
+        _ => vec!["1.0001"; terms / 3].join("*") + "*t",
     }
 }
 

@@ -206,9 +206,9 @@ fn unreadable_and_unsupported_files_are_refused_naming_the_file() {
     assert_eq!(without.n_nodes(), 4);
 }
 
-/// Valid meshes that earlier readers refused: sparse or offset node and element tags (every tag
-/// + 100 000), and a mesh scaled by 10⁻¹⁰⁰ (products of two signed measures underflow; their
-/// signs do not).
+/// Valid meshes that earlier readers refused: sparse or offset node and element tags (each tag
+/// plus 100 000), and a mesh scaled by 10⁻¹⁰⁰ (products of two signed measures underflow;
+/// their signs do not).
 #[test]
 fn offset_tags_and_tiny_scales_read_as_the_same_mesh() {
     // Gmsh's own file, its $Nodes and $Elements rewritten with every tag + 100 000.

@@ -61,7 +61,8 @@
 //! [`Expression::derivative`] carries (value, ∂/∂v) pairs through the program: the usual rules,
 //! `a^b` as b·a^(b−1)·a′ + a^b·ln(a)·b′ with the first term left out where a′ = 0 and the
 //! second where b′ = 0 (so a negative base with a constant exponent has its derivative),
-//! `abs` as sign(a)·a′ with 0 at a = 0, `min` and `max` the derivative of the argument they
+//! `abs` as sign(a)·a′ with the right derivative a′ at a = 0 (a law's slip rate is r ≥ 0, so
+//! `abs(r)` then has the slope of r), `min` and `max` the derivative of the argument they
 //! return (of the first on a tie), `atan2(a, b)` as (b a′ − a b′)/(a² + b²). A part of the
 //! expression that does not depend on v has derivative exactly 0, even where its value is
 //! infinite or NaN (`sqrt(x)*r` at x = 0 has the r-derivative 0, not NaN).
@@ -540,8 +541,9 @@ impl Op {
             Op::Ln => 1.0 / a,
             Op::Log10 => 1.0 / (a * std::f64::consts::LN_10),
             Op::Sqrt => 0.5 / value,
-            // sign(a), 0 at the kink (NaN stays NaN).
-            Op::Abs if a == 0.0 => 0.0,
+            // sign(a), +1 at the kink: the right derivative, the one a law has on its domain
+            // r ≥ 0 (NaN stays NaN).
+            Op::Abs if a == 0.0 => 1.0,
             Op::Abs => a.signum(),
             _ => unreachable!("{self:?} is not a one-argument instruction"),
         };
@@ -1305,8 +1307,9 @@ mod tests {
     #[test]
     fn derivatives_at_the_kinks_and_in_other_variables() {
         let f = |text: &str| Expression::parse_with(text, &["r", "theta"]).unwrap();
-        // abs: 0 at the kink; min and max: the first argument's derivative on a tie.
-        assert_eq!(slope(&f("abs(r - 0.5)"), 0.5), 0.0);
+        // abs: the right derivative at the kink; min and max: the first argument's on a tie.
+        assert_eq!(slope(&f("abs(r - 0.5)"), 0.5), 1.0);
+        assert_eq!(slope(&f("abs(0.5 - r)"), 0.5), -1.0);
         assert_eq!(slope(&f("min(2*r, 1)"), 0.5), 2.0);
         assert_eq!(slope(&f("min(1, 2*r)"), 0.5), 0.0);
         assert_eq!(slope(&f("max(3*r, 1.5)"), 0.5), 3.0);
