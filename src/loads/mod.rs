@@ -18,7 +18,7 @@ mod load;
 mod quadrature;
 
 pub use datum::Datum;
-pub use expression::{Expression, ExpressionError};
+pub use expression::{Expression, ExpressionError, MAX_EXPRESSION_BYTES, MAX_EXPRESSION_DEPTH};
 pub use load::{nodal_values, Load, LoadKind};
 
 /// Errors of building or evaluating a load; each names the load's label.

@@ -30,7 +30,7 @@ use crate::model::{ContactLaws, Problem, State, StepMatrix};
 pub const COMPLIANCE_ESTIMATE_UP_TO: usize = 200_000;
 
 /// Cap on the iterates of the fixed point on a nonlinear heat exchange per step
-/// ([`StepSolver::exchange_iteration`]).
+/// (in [`StepSolver::step`]).
 pub const EXCHANGE_ITERATIONS: usize = 50;
 
 /// The linear part of a step, set up once per step size: factored (direct path) or ordered
