@@ -306,26 +306,42 @@ fn stopped_run_hint(out: &std::path::Path) -> String {
     }
 }
 
-/// SIGINT and SIGTERM ask the run to stop after the current step (and say so on stderr); a
-/// second one ends the process at once.
+/// SIGINT and SIGTERM ask the run to stop after the current step: it then writes the last
+/// completed state as a checkpoint, finishes its files and says `interrupted`, so that the folder
+/// continues with `--restart`. A step cannot be cut short without losing that (the solvers have
+/// no point to stop at inside a step, and ending the process leaves `running`, no checkpoint and
+/// perhaps a half-written frame), so a second signal only says so; a third ends the process at
+/// once, and the message says what is then lost.
+///
+/// The signals are read on a thread of their own (`signal_hook::iterator`), not in a handler,
+/// so it may count them and print.
 fn stop_on_signals() -> anyhow::Result<StopFlag> {
     use signal_hook::consts::{SIGINT, SIGTERM};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
     let flag = StopFlag::new();
-    let armed = Arc::new(AtomicBool::new(false));
-    for (signal, cause) in [(SIGINT, Interruption::Interrupt), (SIGTERM, Interruption::Terminate)] {
-        // Registered first, so that it sees `armed` as the previous signal left it.
-        signal_hook::flag::register_conditional_shutdown(signal, 128 + signal, Arc::clone(&armed))?;
-        signal_hook::flag::register_usize(signal, flag.atomic(), StopFlag::code(cause))?;
-        signal_hook::flag::register(signal, Arc::clone(&armed))?;
-    }
-    // A handler may not print; this thread tells the user that the stop request was heard.
-    std::thread::spawn(move || loop {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        if armed.load(Ordering::SeqCst) {
-            eprintln!("\nstopping after the current step (a second Ctrl-C stops at once, and loses that step)");
-            break;
+    let stop = flag.clone();
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    std::thread::spawn(move || {
+        for (heard, signal) in signals.forever().enumerate() {
+            let cause = match signal {
+                SIGTERM => Interruption::Terminate,
+                _ => Interruption::Interrupt,
+            };
+            match heard {
+                0 => {
+                    stop.request(cause);
+                    eprintln!(
+                        "\nstopping after the current step, then writing a checkpoint to continue from (--restart)"
+                    );
+                }
+                1 => eprintln!(
+                    "\nstill finishing the current step, so that the folder can be continued; a third signal ends \
+                     the process at once, without the checkpoint of this stop (summary.json then still says running)"
+                ),
+                _ => {
+                    eprintln!("\nended at once: the folder keeps only the files written so far");
+                    std::process::exit(128 + signal);
+                }
+            }
         }
     });
     Ok(flag)

@@ -1,0 +1,190 @@
+//! Issue 26, the driver's part: input and interruptions that must leave a folder a user can go
+//! on with. Two Ctrl-C still leave a folder that continues to the bits of the uninterrupted run;
+//! a run started from another run's checkpoint (`initial.from`) continues after that checkpoint
+//! is gone; the README's first command runs twice (a completed run in the default folder is
+//! replaced, nothing else is) and no finished folder keeps the lock file; a refused restart names
+//! the keys that differ, a restart says which output times it cannot write, and contradicting
+//! `--set`s are refused naming both.
+//!
+//! The CLI is run as a child process (the built binary), as a user runs it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use thermocontact::driver::CHECKPOINT_FILE;
+
+const LOCK: &str = ".thermocontact.lock";
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermocontact-i26-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_thermocontact"))
+}
+
+/// `thermocontact run --quiet ARGS`, its output captured.
+fn run(args: &[&str]) -> Output {
+    bin().arg("run").arg("--quiet").args(args).output().unwrap()
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+fn ok(output: Output) -> Output {
+    assert!(output.status.success(), "{}", text(&output));
+    output
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn names(dir: &Path, keep: impl Fn(&str) -> bool) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| keep(n))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The frames a `.pvd` lists.
+fn pvd_files(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("solution.pvd")).unwrap();
+    let mut files: Vec<String> = text
+        .split("file=\"")
+        .skip(1)
+        .map(|rest| rest.split('"').next().unwrap().to_string())
+        .collect();
+    files.sort();
+    files
+}
+
+fn same_bytes(a: &Path, b: &Path, names: &[String]) {
+    assert!(!names.is_empty());
+    for name in names {
+        let (x, y) = (
+            std::fs::read(a.join(name)).unwrap(),
+            std::fs::read(b.join(name)).unwrap(),
+        );
+        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
+    }
+}
+
+/// The lines of `steps.csv` without the `seconds` column (the one that depends on the machine).
+fn steps_without_seconds(dir: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join("steps.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
+    text.lines()
+        .map(|line| {
+            let mut cells: Vec<&str> = line.split(',').collect();
+            cells.remove(seconds);
+            cells.join(",")
+        })
+        .collect()
+}
+
+/// Waits until `path` exists (a process writes it), at most two minutes.
+fn wait_for(path: &Path) {
+    let start = Instant::now();
+    while !path.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn signal(child: &std::process::Child, name: &str) {
+    let sent = Command::new("kill")
+        .arg(name)
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(sent.success());
+}
+
+/// The whole output of a run (frames, contact CSVs, steps.csv) equals the uninterrupted run's.
+fn assert_same_run(whole: &Path, dir: &Path) {
+    let frames = names(whole, |n| n.ends_with(".vtu") || n.starts_with("contact_"));
+    assert_eq!(names(dir, |n| n.ends_with(".vtu") || n.starts_with("contact_")), frames);
+    same_bytes(whole, dir, &frames);
+    assert_eq!(steps_without_seconds(dir), steps_without_seconds(whole));
+}
+
+fn assert_no_temporary_files(dir: &Path) {
+    let temporary = names(dir, |n| n.contains(".tmp-"));
+    assert!(temporary.is_empty(), "{temporary:?}");
+}
+
+/// Finding 11: a second Ctrl-C, sent while the run still finishes the step of the first, used
+/// to end the process at once (status `running`, no checkpoint without `checkpoint_every`,
+/// sometimes a temporary file and a frame missing from the `.pvd`). It now leaves a folder that
+/// says `interrupted`, lists its frames, and continues to the bits of the uninterrupted run.
+#[test]
+fn a_second_ctrl_c_still_leaves_a_folder_that_continues() {
+    // Steps of some tens of milliseconds, and a frame of a 256 × 64 mesh to write at the stop.
+    let args = [
+        "--set",
+        "mesh.nx=256",
+        "--set",
+        "mesh.ny=64",
+        "--set",
+        "time.steps=200",
+        "--set",
+        "output.times=[0.25, 0.5, 0.75, 1.0]",
+    ];
+    let whole = scratch("twice-whole");
+    ok(bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&whole)
+        .args(args)
+        .output()
+        .unwrap());
+
+    let dir = scratch("twice");
+    let child = bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&dir)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The march has begun (summary.json is written just before it), and is far from the end.
+    wait_for(&dir.join("summary.json"));
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-INT");
+    std::thread::sleep(Duration::from_millis(15));
+    signal(&child, "-INT");
+    let stopped = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&stopped.stderr).into_owned();
+    assert_eq!(stopped.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("loses that step"), "{stderr}");
+    assert_eq!(summary(&dir)["status"], "interrupted", "{stderr}");
+    assert!(dir.join(CHECKPOINT_FILE).exists(), "{stderr}");
+    assert_no_temporary_files(&dir);
+    assert_eq!(pvd_files(&dir), names(&dir, |n| n.ends_with(".vtu")));
+    assert!(!dir.join(LOCK).exists(), "the lock file stays after an interruption");
+
+    let restarted = ok(run(&["--restart", dir.to_str().unwrap()]));
+    assert!(text(&restarted).contains("continuing from step"));
+    assert_eq!(summary(&dir)["status"], "completed");
+    assert_same_run(&whole, &dir);
+    assert_no_temporary_files(&dir);
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&whole).unwrap();
+}
