@@ -416,7 +416,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     restart.path.display()
                 );
             }
-            let problem = scenario.build()?;
+            // A continued run starts from its checkpoint: `initial.from` is not read again (that
+            // checkpoint may be gone; its name still counts in the scenario's fingerprint).
+            let problem = match &restart {
+                Some(_) => scenario.build_continued()?,
+                None => scenario.build()?,
+            };
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,

@@ -8,11 +8,14 @@
 //!
 //! The CLI is run as a child process (the built binary), as a user runs it.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use thermocontact::driver::CHECKPOINT_FILE;
+use thermocontact::driver::{self, RunOptions, StopFlag, CHECKPOINT_FILE};
+use thermocontact::Interruption;
 
 const LOCK: &str = ".thermocontact.lock";
 
@@ -187,4 +190,83 @@ fn a_second_ctrl_c_still_leaves_a_folder_that_continues() {
     assert_no_temporary_files(&dir);
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&whole).unwrap();
+}
+
+/// A checkpoint of the coarse example at step 3, in `dir` (a run stopped there).
+fn checkpoint_at_step_3(dir: &Path) -> PathBuf {
+    let scenario = common::coarse(&[]);
+    let problem = scenario.build().unwrap();
+    let stop = StopFlag::new();
+    let options = RunOptions {
+        out_dir: Some(dir.to_path_buf()),
+        stop: Some(stop.clone()),
+        ..RunOptions::default()
+    };
+    let stopped = driver::run_observed(
+        &problem,
+        &scenario.solver_params(),
+        &scenario.output_plan(),
+        &options,
+        |_, state, _| {
+            if state.n == 3 {
+                stop.request(Interruption::Caller);
+            }
+        },
+    );
+    assert!(stopped.is_err());
+    dir.join(CHECKPOINT_FILE)
+}
+
+/// Finding 12: a run started from another run's checkpoint (`initial.from`) continues with
+/// `--restart` after that checkpoint is gone (a completed run removes its checkpoint): the state
+/// comes from the run's own checkpoint, and `initial.from` is not read again.
+#[test]
+fn a_run_from_another_runs_checkpoint_restarts_after_that_checkpoint_is_gone() {
+    let root = scratch("initial-from");
+    let source = checkpoint_at_step_3(&root.join("a"));
+    let from = format!("initial.from={:?}", source.display().to_string());
+    let args = [
+        "--set",
+        "mesh.nx=16",
+        "--set",
+        "mesh.ny=4",
+        "--set",
+        "time.steps=3000",
+        "--set",
+        "output.times=[0.5, 1.0]",
+        "--set",
+        "output.checkpoint_every=200",
+        "--set",
+        from.as_str(),
+    ];
+    let whole = root.join("b-whole");
+    ok(bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&whole)
+        .args(args)
+        .output()
+        .unwrap());
+
+    let dir = root.join("b");
+    let mut child = bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&dir)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&dir.join(CHECKPOINT_FILE));
+    signal(&child, "-KILL");
+    child.wait().unwrap();
+
+    std::fs::remove_file(&source).unwrap();
+    let restarted = ok(run(&["--restart", dir.to_str().unwrap()]));
+    assert!(text(&restarted).contains("continuing from step"));
+    assert_eq!(summary(&dir)["status"], "completed");
+    let frames = vec!["solution_1500.vtu".to_string(), "solution_3000.vtu".to_string()];
+    assert_eq!(names(&dir, |n| n.ends_with(".vtu")), frames);
+    same_bytes(&whole, &dir, &frames);
+    same_bytes(&whole, &dir, &["contact_1500.csv".into(), "contact_3000.csv".into()]);
+    std::fs::remove_dir_all(&root).unwrap();
 }

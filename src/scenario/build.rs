@@ -416,6 +416,17 @@ impl Scenario {
         })
     }
 
+    /// The problem of a run continued from its own checkpoint (`--restart`): [`Scenario::build`]
+    /// without reading `initial.from`. The continued run starts from its checkpoint, not from
+    /// the initial fields, and the checkpoint `initial.from` names may be gone by then (a run
+    /// that completes removes its checkpoint). The path still belongs to the scenario's
+    /// fingerprint, so the restart stays tied to the same initial state's name.
+    pub fn build_continued(&self) -> Result<Problem, Error> {
+        let mut continued = self.clone();
+        continued.initial.from = None;
+        continued.build()
+    }
+
     /// The solver settings of the scenario.
     pub fn solver_params(&self) -> SolverParams {
         let s = &self.solver;
