@@ -61,10 +61,11 @@ enum Command {
     Run {
         #[command(flatten)]
         scenario: ScenarioArgs,
-        /// Output folder (created if missing). A run locks it while it runs, and refuses a
-        /// folder that holds another run's results (see --overwrite and --restart).
-        #[arg(long, default_value = "out")]
-        out: PathBuf,
+        /// Output folder (created if missing; default `out`). A run locks it while it runs, and
+        /// refuses a folder that holds another run's results (see --overwrite and --restart);
+        /// without --out, a *completed* run's results in `out` are replaced (said in one line).
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Remove the results of the previous run in the output folder first (only the files a
         /// run writes: summary.json, solution.pvd, the frames, steps.csv, scenario.toml,
         /// checkpoint.bin; other files stay).
@@ -396,6 +397,10 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             restart,
             quiet,
         } => {
+            // Without --out, the default folder takes a new run in place of a completed one
+            // (running the same command twice is the first thing a newcomer does).
+            let replace_completed = out.is_none() && restart.is_none();
+            let out = out.unwrap_or_else(|| PathBuf::from("out"));
             let (scenario, out, restart) = match restart {
                 None => (scenario.load()?, out, None),
                 Some(dir) => {
@@ -422,11 +427,18 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 Some(_) => scenario.build_continued()?,
                 None => scenario.build()?,
             };
+            if replace_completed && !overwrite && thermocontact::output::folder::holds_completed_run(&out) {
+                println!(
+                    "replacing the completed run in {}/ (give --out to keep results apart)",
+                    out.display()
+                );
+            }
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,
                 log: true,
                 overwrite,
+                replace_completed,
                 stop: Some(stop_on_signals()?),
                 restart,
                 ..RunOptions::default()

@@ -270,3 +270,94 @@ fn a_run_from_another_runs_checkpoint_restarts_after_that_checkpoint_is_gone() {
     same_bytes(&whole, &dir, &["contact_1500.csv".into(), "contact_3000.csv".into()]);
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+const SMALL: [&str; 6] = ["--set", "mesh.nx=8", "--set", "mesh.ny=2", "--set", "time.steps=8"];
+
+/// Finding 15: the README's first command, run a second time, replaces the completed run in the
+/// default folder (saying so); an explicit `--out` still refuses it; a run that did not complete
+/// is not replaced; a user's own file stays; no finished folder keeps `.thermocontact.lock`.
+#[test]
+fn the_default_folder_takes_a_new_run_in_place_of_a_completed_one() {
+    let root = scratch("default-out");
+    std::fs::create_dir_all(&root).unwrap();
+    let here = |args: &[&str]| {
+        bin()
+            .current_dir(&root)
+            .arg("run")
+            .arg("--quiet")
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = root.join("out");
+    let first = ok(here(&SMALL));
+    assert!(!text(&first).contains("replacing"), "{}", text(&first));
+    assert!(!out.join(LOCK).exists(), "the lock file stays after a completed run");
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let first_id = summary(&out)["run_id"].clone();
+
+    // Again, with another number of steps: the old run's frames go.
+    let again = ok(here(&[
+        "--set",
+        "mesh.nx=8",
+        "--set",
+        "mesh.ny=2",
+        "--set",
+        "time.steps=4",
+    ]));
+    assert!(
+        text(&again).contains(&"replacing the completed run in out/".to_string()),
+        "{}",
+        text(&again)
+    );
+    assert_ne!(summary(&out)["run_id"], first_id);
+    assert_eq!(summary(&out)["steps"], 4);
+    assert!(!out.join("solution_0008.vtu").exists(), "a frame of the old run stays");
+    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+    assert!(!out.join(LOCK).exists());
+
+    // An explicit --out keeps the refusal.
+    let refused = here(&[&SMALL[..], &["--out", "out"]].concat());
+    assert!(!refused.status.success());
+    assert!(text(&refused).contains("--overwrite"), "{}", text(&refused));
+    assert!(!out.join(LOCK).exists(), "a refused claim leaves the lock file");
+
+    // A run that did not complete (here: failed at once, a load that is NaN) is not replaced.
+    let failed = here(&[
+        "--set",
+        "mesh.nx=8",
+        "--set",
+        "mesh.ny=2",
+        "--set",
+        "time.steps=8",
+        "--out",
+        "stopped",
+        "--set",
+        "loads.body_force=[\"0\", \"sqrt(-1)\"]",
+    ]);
+    let stopped_dir = root.join("stopped");
+    if !failed.status.success() && stopped_dir.join("summary.json").exists() {
+        assert!(
+            !stopped_dir.join(LOCK).exists(),
+            "the lock file stays after a failed run"
+        );
+    }
+    std::fs::write(out.join("summary.json"), r#"{"status": "interrupted"}"#).unwrap();
+    let kept = here(&SMALL);
+    assert!(!kept.status.success(), "{}", text(&kept));
+    assert!(text(&kept).contains("--overwrite"), "{}", text(&kept));
+    assert_eq!(summary(&out)["status"], "interrupted");
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// A killed run's lock file stays, unlocked: the next run takes the folder as before.
+#[test]
+fn a_killed_runs_lock_is_still_stale() {
+    let dir = scratch("stale-lock");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(LOCK), "process 1").unwrap();
+    ok(run(&[&SMALL[..], &["--out", dir.to_str().unwrap()]].concat()));
+    assert_eq!(summary(&dir)["status"], "completed");
+    assert!(!dir.join(LOCK).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -81,6 +81,9 @@ pub struct RunOptions {
     pub log: bool,
     /// Replace another run's results found in `out_dir` (otherwise the folder is refused).
     pub overwrite: bool,
+    /// Replace the results found in `out_dir` if their run completed, refuse them otherwise
+    /// (the CLI's default folder, [`crate::output::folder::Existing::ReplaceCompleted`]).
+    pub replace_completed: bool,
     /// Set from outside (a signal handler, another thread) to stop after the current step.
     pub stop: Option<StopFlag>,
     /// Continue this checkpoint's run (its folder is `out_dir`) instead of starting at t = 0.
