@@ -348,6 +348,41 @@ fn stop_on_signals() -> anyhow::Result<StopFlag> {
     Ok(flag)
 }
 
+/// A restart with a scenario other than the one of the checkpoint's run: refused naming the keys
+/// whose values differ, read from the folder's `scenario.toml` (the stopped run's). Without that
+/// file, or where no key of the problem differs, the driver's check (by fingerprint) decides.
+fn refuse_another_scenario(
+    scenario: &Scenario,
+    restart: &driver::Restart,
+    dir: &std::path::Path,
+) -> anyhow::Result<()> {
+    let expected = scenario.fingerprint();
+    if restart
+        .checkpoint
+        .identity
+        .scenario
+        .as_deref()
+        .is_none_or(|found| found == expected)
+    {
+        return Ok(());
+    }
+    let echo = dir.join("scenario.toml");
+    let Ok(before) = std::fs::read_to_string(&echo) else {
+        return Ok(());
+    };
+    let keys = thermocontact::scenario::differing_keys(&before, &scenario.to_toml());
+    if keys.is_empty() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "the checkpoint {} belongs to another scenario; these keys differ from the stopped run's ({}):\n  {}\n\
+         a run continues only from its own checkpoints (only [output] and [solver] may change)",
+        restart.path.display(),
+        echo.display(),
+        keys.join("\n  ")
+    )
+}
+
 fn execute(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Scenario => {
@@ -414,6 +449,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             };
             print_setup(&scenario);
             if let Some(restart) = &restart {
+                refuse_another_scenario(&scenario, restart, &out)?;
                 println!(
                     "continuing from step {} (t = {}) of {}",
                     restart.checkpoint.state.n,

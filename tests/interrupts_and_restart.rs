@@ -361,3 +361,57 @@ fn a_killed_runs_lock_is_still_stale() {
     assert!(!dir.join(LOCK).exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A folder stopped after step 3 of the coarse example, with its `scenario.toml`, through the CLI
+/// (SIGKILL after a periodic checkpoint).
+fn stopped_folder(dir: &Path, args: &[&str]) {
+    let mut child = bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(dir)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&dir.join(CHECKPOINT_FILE));
+    signal(&child, "-KILL");
+    child.wait().unwrap();
+}
+
+const LONG: [&str; 10] = [
+    "--set",
+    "mesh.nx=8",
+    "--set",
+    "mesh.ny=2",
+    "--set",
+    "time.steps=3000",
+    "--set",
+    "output.times=[0.5, 1.0]",
+    "--set",
+    "output.checkpoint_every=1000",
+];
+
+/// Finding 14 (a): a restart with another scenario is refused naming the keys that differ (with
+/// both values), not two 64-hex digests.
+#[test]
+fn a_refused_restart_names_the_keys_that_differ() {
+    let dir = scratch("refused-restart");
+    stopped_folder(&dir, &LONG);
+    let other = dir.join("other.toml");
+    let echo = std::fs::read_to_string(dir.join("scenario.toml")).unwrap();
+    std::fs::write(&other, echo).unwrap();
+    let refused = run(&[
+        other.to_str().unwrap(),
+        "--restart",
+        dir.to_str().unwrap(),
+        "--set",
+        "material.density=50",
+    ]);
+    assert!(!refused.status.success());
+    let message = text(&refused);
+    assert!(message.contains("material.density"), "{message}");
+    assert!(message.contains("50"), "{message}");
+    let hex64 = message.split(|c: char| !c.is_ascii_hexdigit()).any(|w| w.len() == 64);
+    assert!(!hex64, "{message}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
