@@ -348,6 +348,20 @@ fn stop_on_signals() -> anyhow::Result<StopFlag> {
     Ok(flag)
 }
 
+/// The output times of `scenario` at or before the checkpoint of `restart` that the stopped run
+/// did not write: a continued run starts after the checkpoint, so it cannot write them.
+fn skipped_output_times(scenario: &Scenario, restart: &driver::Restart) -> Vec<f64> {
+    let at = restart.checkpoint.state.n;
+    let written: Vec<u64> = (restart.checkpoint.record.get("outputs").and_then(|o| o.as_array()))
+        .map(|outputs| outputs.iter().filter_map(|o| o.get("n")?.as_u64()).collect())
+        .unwrap_or_default();
+    let k = scenario.time_step();
+    (scenario.output_plan().steps.into_iter())
+        .filter(|&n| n <= at && !written.contains(&(n as u64)))
+        .map(|n| n as f64 * k)
+        .collect()
+}
+
 /// A restart with a scenario other than the one of the checkpoint's run: refused naming the keys
 /// whose values differ, read from the folder's `scenario.toml` (the stopped run's). Without that
 /// file, or where no key of the problem differs, the driver's check (by fingerprint) decides.
@@ -456,6 +470,16 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     restart.checkpoint.state.t,
                     restart.path.display()
                 );
+                let skipped = skipped_output_times(&scenario, restart);
+                if !skipped.is_empty() {
+                    let times: Vec<String> = skipped.iter().map(|t| format!("{t}")).collect();
+                    eprintln!(
+                        "warning: {} output time(s) at or before the checkpoint (t = {}) are not written, as the run continues after it: t = {}",
+                        skipped.len(),
+                        restart.checkpoint.state.t,
+                        times.join(", ")
+                    );
+                }
             }
             // A continued run starts from its checkpoint: `initial.from` is not read again (that
             // checkpoint may be gone; its name still counts in the scenario's fingerprint).

@@ -415,3 +415,22 @@ fn a_refused_restart_names_the_keys_that_differ() {
     assert!(!hex64, "{message}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Finding 14 (b): output times at or before the checkpoint cannot be written by a continued
+/// run; it says so (how many, which) instead of dropping them silently, and continues.
+#[test]
+fn a_restart_says_which_output_times_it_cannot_write() {
+    let dir = scratch("skipped-times");
+    stopped_folder(&dir, &LONG);
+    let continued = ok(run(&[
+        "--restart",
+        dir.to_str().unwrap(),
+        "--set",
+        "output.times=[0.01, 0.02, 0.5, 1.0]",
+    ]));
+    let message = text(&continued);
+    assert!(message.contains("warning: 2 output time(s)"), "{message}");
+    assert!(message.contains("0.01, 0.02"), "{message}");
+    assert_eq!(summary(&dir)["status"], "completed");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
