@@ -434,3 +434,36 @@ fn a_restart_says_which_output_times_it_cannot_write() {
     assert_eq!(summary(&dir)["status"], "completed");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Finding 14 (c): `--set friction=1 --set friction.bound=2` is refused naming both (the first
+/// vanished without a word); a key given twice is a warning, the later value used.
+#[test]
+fn contradicting_overrides_are_refused_and_repeated_ones_warned() {
+    let dir = scratch("overrides");
+    let refused = run(&[
+        "--set",
+        "friction=1",
+        "--set",
+        "friction.bound=2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(!refused.status.success());
+    let message = text(&refused);
+    assert!(
+        message.contains("friction=1") && message.contains("friction.bound=2"),
+        "{message}"
+    );
+    assert!(!message.contains("panicked"), "{message}");
+    assert!(!dir.exists(), "a refused scenario writes nothing");
+
+    let twice = ok(run(&[
+        &SMALL[..],
+        &["--set", "mesh.nx=4", "--out", dir.to_str().unwrap()],
+    ]
+    .concat()));
+    let message = text(&twice);
+    assert!(message.contains("warning: --set mesh.nx is given twice"), "{message}");
+    assert_eq!(summary(&dir)["nodes"], 5 * 3);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
