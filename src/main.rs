@@ -309,10 +309,10 @@ fn stopped_run_hint(out: &std::path::Path) -> String {
 
 /// SIGINT and SIGTERM ask the run to stop after the current step: it then writes the last
 /// completed state as a checkpoint, finishes its files and says `interrupted`, so that the folder
-/// continues with `--restart`. A step cannot be cut short without losing that (the solvers have
-/// no point to stop at inside a step, and ending the process leaves `running`, no checkpoint and
-/// perhaps a half-written frame), so a second signal only says so; a third ends the process at
-/// once, and the message says what is then lost.
+/// continues with `--restart`. A second signal cuts the current step short
+/// ([`StopFlag::request_now`]): the run ends at the last completed step, its files written the
+/// same way. A third ends the process at once (ending it at the second, as before, left `running`,
+/// no checkpoint and sometimes a half-written frame), and the message says what is then lost.
 ///
 /// The signals are read on a thread of their own (`signal_hook::iterator`), not in a handler,
 /// so it may count them and print.
@@ -331,13 +331,18 @@ fn stop_on_signals() -> anyhow::Result<StopFlag> {
                 0 => {
                     stop.request(cause);
                     eprintln!(
-                        "\nstopping after the current step, then writing a checkpoint to continue from (--restart)"
+                        "\nstopping after the current step, then writing a checkpoint to continue from \
+                         (a second Ctrl-C cuts the step short and stops at the step before)"
                     );
                 }
-                1 => eprintln!(
-                    "\nstill finishing the current step, so that the folder can be continued; a third signal ends \
-                     the process at once, without the checkpoint of this stop (summary.json then still says running)"
-                ),
+                1 => {
+                    stop.request_now(cause);
+                    eprintln!(
+                        "\ncutting the current step short: the run ends at the last completed step and writes its \
+                         checkpoint (a third Ctrl-C ends the process at once, without it: summary.json then still \
+                         says running)"
+                    );
+                }
                 _ => {
                     eprintln!("\nended at once: the folder keeps only the files written so far");
                     std::process::exit(128 + signal);

@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use thermocontact::driver::{self, RunOptions, StopFlag, CHECKPOINT_FILE};
-use thermocontact::Interruption;
+use thermocontact::driver::{self, Restart, RunOptions, StopFlag, CHECKPOINT_FILE};
+use thermocontact::{Error, Interruption};
 
 const LOCK: &str = ".thermocontact.lock";
 
@@ -190,6 +190,55 @@ fn a_second_ctrl_c_still_leaves_a_folder_that_continues() {
     assert_no_temporary_files(&dir);
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&whole).unwrap();
+}
+
+/// Finding 11, the library's side: a stop requested "now" (what the CLI's second Ctrl-C asks)
+/// cuts the step it is on short; the run ends at the last completed step, `interrupted`, with its
+/// checkpoint, and continues to the bits of the uninterrupted run. (Here the request comes
+/// between two steps, so that the step it cuts is known: step 6, stopped before its first solve.)
+#[test]
+fn a_stop_requested_now_ends_at_the_last_completed_step_and_continues() {
+    let scenario = common::coarse(&["output.times=[0.25, 0.5, 0.75, 1.0]"]);
+    let problem = scenario.build().unwrap();
+    let (params, plan) = (scenario.solver_params(), scenario.output_plan());
+    let root = scratch("now");
+    let whole = root.join("whole");
+    let into = |dir: &Path| RunOptions {
+        out_dir: Some(dir.to_path_buf()),
+        ..RunOptions::default()
+    };
+    driver::run(&problem, &params, &plan, &into(&whole)).unwrap();
+
+    let dir = root.join("cut");
+    let stop = StopFlag::new();
+    let options = RunOptions {
+        stop: Some(stop.clone()),
+        ..into(&dir)
+    };
+    let mut seen = Vec::new();
+    let stopped = driver::run_observed(&problem, &params, &plan, &options, |_, state, _| {
+        seen.push(state.n);
+        if state.n == 5 {
+            stop.now().store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    });
+    let error = stopped.err().unwrap();
+    assert!(matches!(error, Error::Interrupted { step: 5, .. }), "{error}");
+    assert_eq!(seen, [1, 2, 3, 4, 5]);
+    assert_eq!(summary(&dir)["status"], "interrupted");
+    assert_no_temporary_files(&dir);
+    assert_eq!(pvd_files(&dir), names(&dir, |n| n.ends_with(".vtu")));
+
+    let restart = Restart::read(&dir.join(CHECKPOINT_FILE)).unwrap();
+    assert_eq!(restart.checkpoint.state.n, 5);
+    let continuing = RunOptions {
+        restart: Some(restart),
+        ..into(&dir)
+    };
+    driver::run(&problem, &params, &plan, &continuing).unwrap();
+    assert_eq!(summary(&dir)["status"], "completed");
+    assert_same_run(&whole, &dir);
+    std::fs::remove_dir_all(&root).unwrap();
 }
 
 /// A checkpoint of the coarse example at step 3, in `dir` (a run stopped there).
