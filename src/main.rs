@@ -39,7 +39,9 @@ struct ScenarioArgs {
     /// the default runs as is.
     scenario: Option<PathBuf>,
     /// Override one scenario key, e.g. `--set mesh.nx=256` or `--set solver.kind=paper`
-    /// (dotted path into the TOML; the value is read as TOML, or as a string). Repeatable.
+    /// (dotted path into the TOML; the value is read as TOML, or as a string). Repeatable; a key
+    /// given twice takes the later value (with a warning), and a key inside another --set's
+    /// value (`friction=1`, `friction.bound=2`) is refused.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
 }
