@@ -39,7 +39,9 @@ struct ScenarioArgs {
     /// the default runs as is.
     scenario: Option<PathBuf>,
     /// Override one scenario key, e.g. `--set mesh.nx=256` or `--set solver.kind=paper`
-    /// (dotted path into the TOML; the value is read as TOML, or as a string). Repeatable.
+    /// (dotted path into the TOML; the value is read as TOML, or as a string). Repeatable; a key
+    /// given twice takes the later value (with a warning), and a key inside another --set's
+    /// value (`friction=1`, `friction.bound=2`) is refused.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
 }
@@ -61,10 +63,11 @@ enum Command {
     Run {
         #[command(flatten)]
         scenario: ScenarioArgs,
-        /// Output folder (created if missing). A run locks it while it runs, and refuses a
-        /// folder that holds another run's results (see --overwrite and --restart).
-        #[arg(long, default_value = "out")]
-        out: PathBuf,
+        /// Output folder (created if missing; default `out`). A run locks it while it runs, and
+        /// refuses a folder that holds another run's results (see --overwrite and --restart);
+        /// without --out, a *completed* run's results in `out` are replaced (said in one line).
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Remove the results of the previous run in the output folder first (only the files a
         /// run writes: summary.json, solution.pvd, the frames, steps.csv, scenario.toml,
         /// checkpoint.bin; other files stay).
@@ -306,29 +309,99 @@ fn stopped_run_hint(out: &std::path::Path) -> String {
     }
 }
 
-/// SIGINT and SIGTERM ask the run to stop after the current step (and say so on stderr); a
-/// second one ends the process at once.
+/// SIGINT and SIGTERM ask the run to stop after the current step: it then writes the last
+/// completed state as a checkpoint, finishes its files and says `interrupted`, so that the folder
+/// continues with `--restart`. A second signal cuts the current step short
+/// ([`StopFlag::request_now`]): the run ends at the last completed step, its files written the
+/// same way. A third ends the process at once (ending it at the second, as before, left `running`,
+/// no checkpoint and sometimes a half-written frame), and the message says what is then lost.
+///
+/// The signals are read on a thread of their own (`signal_hook::iterator`), not in a handler,
+/// so it may count them and print.
 fn stop_on_signals() -> anyhow::Result<StopFlag> {
     use signal_hook::consts::{SIGINT, SIGTERM};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
     let flag = StopFlag::new();
-    let armed = Arc::new(AtomicBool::new(false));
-    for (signal, cause) in [(SIGINT, Interruption::Interrupt), (SIGTERM, Interruption::Terminate)] {
-        // Registered first, so that it sees `armed` as the previous signal left it.
-        signal_hook::flag::register_conditional_shutdown(signal, 128 + signal, Arc::clone(&armed))?;
-        signal_hook::flag::register_usize(signal, flag.atomic(), StopFlag::code(cause))?;
-        signal_hook::flag::register(signal, Arc::clone(&armed))?;
-    }
-    // A handler may not print; this thread tells the user that the stop request was heard.
-    std::thread::spawn(move || loop {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        if armed.load(Ordering::SeqCst) {
-            eprintln!("\nstopping after the current step (a second Ctrl-C stops at once, and loses that step)");
-            break;
+    let stop = flag.clone();
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    std::thread::spawn(move || {
+        for (heard, signal) in signals.forever().enumerate() {
+            let cause = match signal {
+                SIGTERM => Interruption::Terminate,
+                _ => Interruption::Interrupt,
+            };
+            match heard {
+                0 => {
+                    stop.request(cause);
+                    eprintln!(
+                        "\nstopping after the current step, then writing a checkpoint to continue from \
+                         (a second Ctrl-C cuts the step short and stops at the step before)"
+                    );
+                }
+                1 => {
+                    stop.request_now(cause);
+                    eprintln!(
+                        "\ncutting the current step short: the run ends at the last completed step and writes its \
+                         checkpoint (a third Ctrl-C ends the process at once, without it: summary.json then still \
+                         says running)"
+                    );
+                }
+                _ => {
+                    eprintln!("\nended at once: the folder keeps only the files written so far");
+                    std::process::exit(128 + signal);
+                }
+            }
         }
     });
     Ok(flag)
+}
+
+/// The output times of `scenario` at or before the checkpoint of `restart` that the stopped run
+/// did not write: a continued run starts after the checkpoint, so it cannot write them.
+fn skipped_output_times(scenario: &Scenario, restart: &driver::Restart) -> Vec<f64> {
+    let at = restart.checkpoint.state.n;
+    let written: Vec<u64> = (restart.checkpoint.record.get("outputs").and_then(|o| o.as_array()))
+        .map(|outputs| outputs.iter().filter_map(|o| o.get("n")?.as_u64()).collect())
+        .unwrap_or_default();
+    let k = scenario.time_step();
+    (scenario.output_plan().steps.into_iter())
+        .filter(|&n| n <= at && !written.contains(&(n as u64)))
+        .map(|n| n as f64 * k)
+        .collect()
+}
+
+/// A restart with a scenario other than the one of the checkpoint's run: refused naming the keys
+/// whose values differ, read from the folder's `scenario.toml` (the stopped run's). Without that
+/// file, or where no key of the problem differs, the driver's check (by fingerprint) decides.
+fn refuse_another_scenario(
+    scenario: &Scenario,
+    restart: &driver::Restart,
+    dir: &std::path::Path,
+) -> anyhow::Result<()> {
+    let expected = scenario.fingerprint();
+    if restart
+        .checkpoint
+        .identity
+        .scenario
+        .as_deref()
+        .is_none_or(|found| found == expected)
+    {
+        return Ok(());
+    }
+    let echo = dir.join("scenario.toml");
+    let Ok(before) = std::fs::read_to_string(&echo) else {
+        return Ok(());
+    };
+    let keys = thermocontact::scenario::differing_keys(&before, &scenario.to_toml());
+    if keys.is_empty() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "the checkpoint {} belongs to another scenario; these keys differ from the stopped run's ({}):\n  {}\n\
+         a run continues only from its own checkpoints (only [output] and [solver] may change)",
+        restart.path.display(),
+        echo.display(),
+        keys.join("\n  ")
+    )
 }
 
 fn execute(cli: Cli) -> anyhow::Result<()> {
@@ -380,6 +453,10 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             restart,
             quiet,
         } => {
+            // Without --out, the default folder takes a new run in place of a completed one
+            // (running the same command twice is the first thing a newcomer does).
+            let replace_completed = out.is_none() && restart.is_none();
+            let out = out.unwrap_or_else(|| PathBuf::from("out"));
             let (scenario, out, restart) = match restart {
                 None => (scenario.load()?, out, None),
                 Some(dir) => {
@@ -393,19 +470,42 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             };
             print_setup(&scenario);
             if let Some(restart) = &restart {
+                refuse_another_scenario(&scenario, restart, &out)?;
                 println!(
                     "continuing from step {} (t = {}) of {}",
                     restart.checkpoint.state.n,
                     restart.checkpoint.state.t,
                     restart.path.display()
                 );
+                let skipped = skipped_output_times(&scenario, restart);
+                if !skipped.is_empty() {
+                    let times: Vec<String> = skipped.iter().map(|t| format!("{t}")).collect();
+                    eprintln!(
+                        "warning: {} output time(s) at or before the checkpoint (t = {}) are not written, as the run continues after it: t = {}",
+                        skipped.len(),
+                        restart.checkpoint.state.t,
+                        times.join(", ")
+                    );
+                }
             }
-            let problem = scenario.build()?;
+            // A continued run starts from its checkpoint: `initial.from` is not read again (that
+            // checkpoint may be gone; its name still counts in the scenario's fingerprint).
+            let problem = match &restart {
+                Some(_) => scenario.build_continued()?,
+                None => scenario.build()?,
+            };
+            if replace_completed && !overwrite && thermocontact::output::folder::holds_completed_run(&out) {
+                println!(
+                    "replacing the completed run in {}/ (give --out to keep results apart)",
+                    out.display()
+                );
+            }
             let options = RunOptions {
                 out_dir: Some(out.clone()),
                 progress: !quiet,
                 log: true,
                 overwrite,
+                replace_completed,
                 stop: Some(stop_on_signals()?),
                 restart,
                 ..RunOptions::default()

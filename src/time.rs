@@ -127,6 +127,8 @@ impl<'a> Levels<'a> {
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next
     /// level where it does not converge; `n` is the time level being computed (for errors).
     fn advance(&self, previous: &State, t: f64, depth: usize, n: usize) -> Result<(State, StepInfo), TimeError> {
+        // A step cut short from outside (`step::abort`) stops before each (sub)step.
+        crate::step::abort::check()?;
         match self.level(depth)?.step(previous, t) {
             Ok((state, mut info)) => {
                 info.substeps = 1;

@@ -32,7 +32,7 @@ pub(super) struct Files<'a> {
 
 impl<'a> Files<'a> {
     /// Claims `options.out_dir` (none: no files): refused where it holds another run's results,
-    /// unless they are replaced (`overwrite`) or continued (`restart`, with the frames of its
+    /// unless they are replaced (`overwrite`, or `replace_completed` for a completed run's) or continued (`restart`, with the frames of its
     /// `tally`).
     pub fn claim(
         problem: &'a Problem,
@@ -46,6 +46,7 @@ impl<'a> Files<'a> {
                 frames: tally.outputs.iter().map(|o| o.n).collect(),
             },
             (None, true) => Existing::Overwrite,
+            (None, false) if options.replace_completed => Existing::ReplaceCompleted,
             (None, false) => Existing::Refuse,
         };
         Ok(Some(Files {

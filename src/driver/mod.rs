@@ -16,7 +16,8 @@
 //!                writer.rs)
 //!   checkpoints  every `checkpoint_every` steps: the frames sent awaited, checkpoint.bin,
 //!                steps.csv, summary.json ("running") (checkpoints.rs)
-//!   stop         a stop requested from outside ends the march (stop.rs)
+//!   stop         a stop requested from outside ends the march (stop.rs); one requested
+//!                "now" cuts the step short too (step::abort), the run ending at the last one
 //! → finish: the frames sent awaited → summary.json ("completed", or "failed" / "interrupted"
 //!   with the last state written) (files.rs)
 //! ```
@@ -81,6 +82,9 @@ pub struct RunOptions {
     pub log: bool,
     /// Replace another run's results found in `out_dir` (otherwise the folder is refused).
     pub overwrite: bool,
+    /// Replace the results found in `out_dir` if their run completed, refuse them otherwise
+    /// (the CLI's default folder, [`crate::output::folder::Existing::ReplaceCompleted`]).
+    pub replace_completed: bool,
     /// Set from outside (a signal handler, another thread) to stop after the current step.
     pub stop: Option<StopFlag>,
     /// Continue this checkpoint's run (its folder is `out_dir`) instead of starting at t = 0.
@@ -230,6 +234,8 @@ fn march(
 ) -> (State, Option<Error>) {
     o.recorder.marching();
     o.progress.marching();
+    // A stop requested "now" cuts the step short inside its loops (`step::abort`).
+    let _abort = o.stop.0.map(|flag| crate::step::abort::abort_on(flag.now()));
     let marched = time::march_from(problem, levels, first, |state, info| {
         observer(problem, state, info);
         let step = o.recorder.step(state, info);
@@ -247,6 +253,7 @@ fn march(
         Ok(last) => (last, None),
         Err(stopped) => {
             let Stopped { error, last } = *stopped;
+            let error = o.stop.reported(error, &last);
             (last, Some(error))
         }
     }

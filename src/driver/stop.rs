@@ -5,16 +5,25 @@
 //! there is undefined behaviour). The run then finishes the step it is on, writes its files and
 //! returns [`Error::Interrupted`] ([`Stop`], the run's observer of
 //! the flag).
+//!
+//! A second, more urgent request ([`StopFlag::request_now`], the CLI's second Ctrl-C) also cuts
+//! the step it is on short ([`crate::step::abort`], read inside the step's loops): the run then
+//! ends at the last *completed* step, and still writes its files (the checkpoint of that step,
+//! the frames, `summary.json` saying `interrupted`), so that the folder continues with
+//! `--restart` as after a single request. Ending the process instead would leave `running`, no
+//! checkpoint and perhaps a half-written frame.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 
 use crate::error::{Error, Interruption};
 use crate::model::State;
+use crate::step::StepError;
 
-/// A request to stop a run after the current step; clones share the flag.
+/// A request to stop a run after the current step (or, [`StopFlag::request_now`], within it);
+/// clones share the flag.
 #[derive(Debug, Clone, Default)]
-pub struct StopFlag(Arc<AtomicUsize>);
+pub struct StopFlag(Arc<AtomicUsize>, Arc<AtomicBool>);
 
 const CAUSES: [Interruption; 3] = [Interruption::Interrupt, Interruption::Terminate, Interruption::Caller];
 
@@ -29,6 +38,19 @@ impl StopFlag {
         let _ = self
             .0
             .compare_exchange(0, Self::code(cause), Ordering::SeqCst, Ordering::SeqCst);
+    }
+
+    /// Asks the run to stop within the current step, for `cause` (if no request came before):
+    /// the step is cut short and the run ends at the last completed one.
+    pub fn request_now(&self, cause: Interruption) {
+        self.request(cause);
+        self.1.store(true, Ordering::SeqCst);
+    }
+
+    /// The flag that cuts the current step short, for [`crate::step::abort::abort_on`] (and a
+    /// signal handler: storing `true` is the request).
+    pub fn now(&self) -> Arc<AtomicBool> {
+        Arc::clone(&self.1)
     }
 
     /// Why the run was asked to stop, if it was.
@@ -55,6 +77,19 @@ impl StopFlag {
 pub(super) struct Stop<'a>(pub Option<&'a StopFlag>);
 
 impl Stop<'_> {
+    /// The error that ended the march at `last`, as the run reports it: a step cut short
+    /// ([`StepError::Aborted`]) is the interruption it was asked for, after `last`.
+    pub fn reported(&self, error: Error, last: &State) -> Error {
+        match error {
+            Error::Step(StepError::Aborted) => Error::Interrupted {
+                step: last.n,
+                time: last.t,
+                cause: self.0.and_then(StopFlag::requested).unwrap_or(Interruption::Caller),
+            },
+            other => other,
+        }
+    }
+
     /// After the step that reached `state`: [`Error::Interrupted`] where a stop was requested.
     pub fn step(&self, state: &State) -> Result<(), Error> {
         match self.0.and_then(StopFlag::requested) {

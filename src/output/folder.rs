@@ -4,10 +4,18 @@
 //! `.thermocontact.lock` (held until the run ends, released by the OS if the process dies, so a
 //! killed run never leaves a stale lock), then looks for the files of another run. A folder with
 //! results is refused unless the caller asks to replace them (`--overwrite`: that run's files
-//! are removed first) or to continue them (`--restart`: the frames after the checkpoint are
+//! are removed first; the CLI's default folder: only a *completed* run's, [`Existing::ReplaceCompleted`])
+//! or to continue them (`--restart`: the frames after the checkpoint are
 //! removed; so is a stopped run's frame of its last state). So `summary.json`, `solution.pvd` and the frames always belong to one run.
 //!
 //! Only the run's own file names are touched: a user's notes or scripts in the folder stay.
+//!
+//! The lock file is removed when the run ends (the [`RunFolder`] dropped, still holding the
+//! lock), so a finished folder holds only results. Removing a locked file races with a run that
+//! opened it just before: that run would lock a file no longer in the folder, while a third
+//! creates a new one. So a claim checks, once locked, that the file it locked is still the one
+//! named `.thermocontact.lock`, and starts again where it is not. A killed run's lock file
+//! stays, unlocked: the next claim locks and reuses it, as before.
 //!
 //! *Rejected*: a lock file created with `create_new` and removed at the end. A killed run leaves
 //! it behind, and the next run must then guess whether its owner is still alive.
@@ -33,6 +41,20 @@ pub enum Existing {
     /// times it reached), remove the others (those after the checkpoint, and a stopped run's
     /// frame of its last state).
     Continue { frames: Vec<usize> },
+    /// Remove that run's files first if it completed (its `summary.json` says so); refuse the
+    /// folder otherwise (a running, interrupted or failed run may still be continued or
+    /// inspected). The CLI's default folder, so that running the same command twice works.
+    ReplaceCompleted,
+}
+
+/// Whether `dir` holds the results of a run that completed: its `summary.json` says
+/// `"status": "completed"`.
+pub fn holds_completed_run(dir: &Path) -> bool {
+    let Ok(bytes) = fs::read(dir.join("summary.json")) else {
+        return false;
+    };
+    serde_json::from_slice::<serde_json::Value>(&bytes)
+        .is_ok_and(|summary| summary.get("status").and_then(|s| s.as_str()) == Some("completed"))
 }
 
 /// Why a folder cannot be claimed.
@@ -61,7 +83,8 @@ pub enum FolderError {
 #[derive(Debug)]
 pub struct RunFolder {
     dir: PathBuf,
-    _lock: File,
+    /// Held until the run ends; taken by `drop`.
+    lock: Option<File>,
 }
 
 impl RunFolder {
@@ -74,42 +97,40 @@ impl RunFolder {
         };
         fs::create_dir_all(dir).map_err(io)?;
         let lock_path = dir.join(LOCK_FILE);
-        let mut lock = OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&lock_path)
-            .map_err(io)?;
-        match lock.try_lock() {
-            Ok(()) => {}
-            Err(TryLockError::WouldBlock) => {
-                let holder = fs::read_to_string(&lock_path).unwrap_or_default();
-                let holder = match holder.trim() {
-                    "" => "a process that has not written its id yet".to_string(),
-                    text => text.to_string(),
-                };
-                return Err(FolderError::Locked {
-                    dir: dir.to_path_buf(),
-                    holder,
-                });
+        let mut lock = loop {
+            let lock = OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .open(&lock_path)
+                .map_err(io)?;
+            match lock.try_lock() {
+                // The run before removed the file after this one opened it: lock the new one.
+                Ok(()) if !same_file(&lock, &lock_path) => continue,
+                Ok(()) => break lock,
+                Err(error) => return Err(locked(dir, &lock_path, error)),
             }
-            Err(TryLockError::Error(source)) => return Err(io(source)),
-        }
+        };
         lock.set_len(0).map_err(io)?;
         write!(lock, "process {}", std::process::id()).map_err(io)?;
+        // From here on the lock file goes with `folder`, a refusal's included.
+        let folder = RunFolder {
+            dir: dir.to_path_buf(),
+            lock: Some(lock),
+        };
 
         let files = run_files(dir).map_err(io)?;
+        let refuse = || FolderError::HoldsResults {
+            dir: dir.to_path_buf(),
+            found: describe(&files),
+            restartable: files.iter().any(|f| f == CHECKPOINT_FILE),
+        };
         match existing {
-            Existing::Refuse if !files.is_empty() => {
-                return Err(FolderError::HoldsResults {
-                    dir: dir.to_path_buf(),
-                    found: describe(&files),
-                    restartable: files.iter().any(|f| f == CHECKPOINT_FILE),
-                })
-            }
+            Existing::Refuse if !files.is_empty() => return Err(refuse()),
+            Existing::ReplaceCompleted if !files.is_empty() && !holds_completed_run(dir) => return Err(refuse()),
             Existing::Refuse => {}
-            Existing::Overwrite => {
+            Existing::Overwrite | Existing::ReplaceCompleted => {
                 for file in &files {
                     remove(&dir.join(file)).map_err(io)?;
                 }
@@ -121,15 +142,64 @@ impl RunFolder {
                 }
             }
         }
-        Ok(RunFolder {
-            dir: dir.to_path_buf(),
-            _lock: lock,
-        })
+        Ok(folder)
     }
 
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+}
+
+impl Drop for RunFolder {
+    /// The run ended (completed, failed or stopped): its lock file goes, removed while still
+    /// locked and only if it is still this run's (see the module's header).
+    fn drop(&mut self) {
+        let path = self.dir.join(LOCK_FILE);
+        if let Some(lock) = self.lock.take() {
+            if same_file(&lock, &path) {
+                let _ = fs::remove_file(&path);
+            }
+            drop(lock);
+        }
+    }
+}
+
+/// Whether the open file `file` is the one at `path` now.
+fn same_file(file: &File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (file.metadata(), fs::metadata(path)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (file, path);
+        true
+    }
+}
+
+/// The error of a lock that could not be taken.
+fn locked(dir: &Path, lock_path: &Path, error: TryLockError) -> FolderError {
+    match error {
+        TryLockError::WouldBlock => {
+            let holder = fs::read_to_string(lock_path).unwrap_or_default();
+            let holder = match holder.trim() {
+                "" => "a process that has not written its id yet".to_string(),
+                text => text.to_string(),
+            };
+            FolderError::Locked {
+                dir: dir.to_path_buf(),
+                holder,
+            }
+        }
+        TryLockError::Error(source) => FolderError::Io {
+            path: dir.to_path_buf(),
+            source,
+        },
     }
 }
 

@@ -414,6 +414,17 @@ impl Scenario {
         })
     }
 
+    /// The problem of a run continued from its own checkpoint (`--restart`): [`Scenario::build`]
+    /// without reading `initial.from`. The continued run starts from its checkpoint, not from
+    /// the initial fields, and the checkpoint `initial.from` names may be gone by then (a run
+    /// that completes removes its checkpoint). The path still belongs to the scenario's
+    /// fingerprint, so the restart stays tied to the same initial state's name.
+    pub fn build_continued(&self) -> Result<Problem, Error> {
+        let mut continued = self.clone();
+        continued.initial.from = None;
+        continued.build()
+    }
+
     /// The solver settings of the scenario.
     pub fn solver_params(&self) -> SolverParams {
         let s = &self.solver;
@@ -455,12 +466,7 @@ impl Scenario {
     /// larger `solver.max_sweeps` after a failure) and without `mesh.file`'s path (the mesh has
     /// a fingerprint of its own).
     pub fn fingerprint(&self) -> String {
-        let mut table: Table = self.to_toml().parse().expect("a scenario's TOML parses");
-        table.remove("output");
-        table.remove("solver");
-        if let Some(Value::Table(mesh)) = table.get_mut("mesh") {
-            mesh.remove("file");
-        }
+        let table = problem_table(self.to_toml().parse().expect("a scenario's TOML parses"));
         crate::output::checkpoint::text_fingerprint(&table.to_string())
     }
 
@@ -469,6 +475,49 @@ impl Scenario {
     pub fn run_quiet(&self) -> Result<(Summary, State), Error> {
         let problem = self.build()?;
         crate::driver::run_quiet(&problem, &self.solver_params(), &self.output_plan())
+    }
+}
+
+/// The part of a scenario's table that [`Scenario::fingerprint`] covers: all but `[output]`,
+/// `[solver]` and `mesh.file`.
+fn problem_table(mut table: Table) -> Table {
+    table.remove("output");
+    table.remove("solver");
+    if let Some(Value::Table(mesh)) = table.get_mut("mesh") {
+        mesh.remove("file");
+    }
+    table
+}
+
+/// The keys of the problem (what [`Scenario::fingerprint`] covers) whose values differ between
+/// two scenarios as TOML (`before`: a run's `scenario.toml`), each as `key: before → after`
+/// (`absent` where one has no such key), so that a refused restart names them rather than two
+/// digests. A text that does not parse yields no keys.
+pub fn differing_keys(before: &str, after: &str) -> Vec<String> {
+    let (Ok(before), Ok(after)) = (before.parse::<Table>(), after.parse::<Table>()) else {
+        return Vec::new();
+    };
+    let mut keys = Vec::new();
+    differing(&problem_table(before), &problem_table(after), "", &mut keys);
+    keys
+}
+
+fn differing(before: &Table, after: &Table, prefix: &str, keys: &mut Vec<String>) {
+    let mut names: Vec<&String> = before.keys().chain(after.keys()).collect();
+    names.sort();
+    names.dedup();
+    let show = |v: Option<&Value>| v.map_or("absent".to_string(), |v| v.to_string());
+    for name in names {
+        let key = if prefix.is_empty() {
+            name.clone()
+        } else {
+            format!("{prefix}.{name}")
+        };
+        match (before.get(name), after.get(name)) {
+            (Some(Value::Table(b)), Some(Value::Table(a))) => differing(b, a, &key, keys),
+            (b, a) if b != a => keys.push(format!("{key}: {} → {}", show(b), show(a))),
+            _ => {}
+        }
     }
 }
 

@@ -101,9 +101,33 @@ impl Scenario {
         // All overrides form one table laid over at once, so that `friction.law=tresca` and
         // `friction.bound=100` together switch the law (one at a time, the second would meet
         // the first's table, which the switch has emptied).
+        // Two overrides of one key: the later wins, with a warning (a command line edited by
+        // appending is common); one that sets a key inside another's value, or a value over
+        // another's keys, is refused naming both (the first would vanish without a word).
         let mut assigned = Table::new();
+        let mut earlier: Vec<(&str, Table)> = Vec::new();
+        let mut repeated = Vec::new();
         for assignment in overrides {
-            merge(&mut assigned, parse_override(assignment)?);
+            let parsed = parse_override(assignment)?;
+            for (before, table) in &earlier {
+                match overlap(table, &parsed, "") {
+                    Some(Overlap::Same(key)) => repeated.push(format!(
+                        "--set {key} is given twice ({before:?}, then {assignment:?}): the later one is used"
+                    )),
+                    Some(Overlap::Nested(key)) => {
+                        return Err(Error::InvalidValue {
+                            key: key.clone(),
+                            value: format!("--set {before:?} and --set {assignment:?}"),
+                            expected: format!(
+                                "one of them: the second replaces the first's `{key}` (pass the whole table in one --set, or only the keys inside it)"
+                            ),
+                        })
+                    }
+                    None => {}
+                }
+            }
+            merge(&mut assigned, parsed.clone());
+            earlier.push((assignment.as_str(), parsed));
         }
         if given.is_some() {
             refuse_mesh_keys(&assigned)?;
@@ -112,6 +136,7 @@ impl Scenario {
         let text = toml::to_string(&table).map_err(|e| Error::Scenario(e.to_string()))?;
         let mut scenario: Scenario = toml::from_str(&text).map_err(|e| describe(&e, &text))?;
         scenario.rename_deprecated();
+        scenario.warnings.extend(repeated);
         if let Some(mesh) = given {
             scenario.loaded = LoadedMesh(Some(mesh));
         }
@@ -548,6 +573,36 @@ fn parse_override(assignment: &str) -> Result<Table, Error> {
         table = Table::from_iter([(key.to_string(), Value::Table(table))]);
     }
     Ok(table)
+}
+
+/// How two overrides meet on one key (a dotted path).
+enum Overlap {
+    /// Both set the same key to a value: the later replaces the earlier.
+    Same(String),
+    /// One sets a key to a value, the other sets keys inside it (`friction=1`, then
+    /// `friction.bound=2`).
+    Nested(String),
+}
+
+/// Where the override tables `a` and `b` meet, if they do (the first such key).
+fn overlap(a: &Table, b: &Table, prefix: &str) -> Option<Overlap> {
+    for (key, later) in b {
+        let Some(earlier) = a.get(key) else { continue };
+        let path = if prefix.is_empty() {
+            key.clone()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        let found = match (earlier, later) {
+            (Value::Table(e), Value::Table(l)) => overlap(e, l, &path),
+            (Value::Table(_), _) | (_, Value::Table(_)) => Some(Overlap::Nested(path)),
+            _ => Some(Overlap::Same(path)),
+        };
+        if found.is_some() {
+            return found;
+        }
+    }
+    None
 }
 
 /// Lays the override table `later` into `earlier`: tables merge key by key, anything else is

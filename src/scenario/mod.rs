@@ -24,6 +24,7 @@ mod load;
 mod schema;
 mod validate;
 
+pub use build::differing_keys;
 pub use load::{DEFAULT_TOML, MAX_SCENARIO_BYTES};
 pub use schema::{
     Affine, BoundarySpec, DatumSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry, HeatExchangeSpec,

@@ -97,6 +97,7 @@ pub(super) fn convexify<C: ConvexSubproblem>(
     let mut inner_tolerance = params.inner.first();
     let mut checks = Vec::new();
     for m in 1..=params.max_iterations {
+        super::abort::check()?;
         checks = subproblem.solve(m, &mut iterate, inner_tolerance, info)?;
         info.convexification_iterations = m;
         inner_tolerance = params.inner.next(inner_tolerance, &checks);

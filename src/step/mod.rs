@@ -16,6 +16,7 @@
 //! - **Figures and failures.** [`StepInfo`] per step, [`StepFailure`] (criterion, value,
 //!   tolerance) where a solver gives up, [`StepError`] for what stops a run.
 
+pub mod abort;
 mod amg;
 mod condensed;
 mod convexification;
@@ -55,6 +56,9 @@ pub enum StepError {
     /// A load or datum could not be evaluated.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The step was cut short from outside ([`abort`]): not a failure, no cutback retries it.
+    #[error("the step was cut short (a second stop request)")]
+    Aborted,
 }
 
 /// Tolerance and caps of a Krylov solve.
