@@ -60,6 +60,51 @@ pub enum MeshError {
     /// A boundary-part facet that is the face of no cell.
     #[error("a facet of part `{part}` is the face of no cell, at {facet:?}")]
     FacetOnNoCell { part: String, facet: Vec<[f64; 3]> },
+    /// A mesh too large for the machine's memory, refused before it is built ([`fits_in_memory`]).
+    #[error(
+        "{what}: {nodes} nodes and {cells} cells need about {needed} of memory to build, but this \
+         machine has {available}: use fewer cells"
+    )]
+    TooLarge {
+        /// The mesh asked for: "a rectangle of 100000 × 100000 cells", "a mesh of 3 nodes".
+        what: String,
+        nodes: usize,
+        cells: usize,
+        needed: String,
+        available: String,
+    },
+}
+
+/// Bytes that building a mesh takes per node: its coordinates and the per-node flags of the
+/// checks, rounded up.
+const BYTES_PER_NODE: f64 = 32.0;
+
+/// Bytes per cell vertex: its node index (8), and its face in the sorted face list of
+/// [`topology::cell_faces`] (40 bytes, held twice at the peak of the parallel collect), with
+/// some slack. A 2D structured mesh (2 triangles per node) takes about 0.6 kB per node, a 3D one
+/// (6 tetrahedra per node) about 2.3 kB.
+const BYTES_PER_CELL_VERTEX: f64 = 96.0;
+
+/// Refuses a mesh of `nodes` nodes and `cells` cells in `dim` dimensions whose building would
+/// need more memory than the machine has ([`crate::resources::machine_memory`]): the one check
+/// of every constructor, called by the generators before they allocate anything and by
+/// [`Mesh::new`] before its face lists. Without it a request of 10¹⁰ nodes aborts the process
+/// (a failed allocation is not an error in Rust), and a Python interpreter with it. `what` names
+/// the mesh in the error. Nothing is allocated here.
+pub fn fits_in_memory(what: &str, dim: usize, nodes: usize, cells: usize) -> Result<(), MeshError> {
+    let needed = BYTES_PER_NODE * nodes as f64 + BYTES_PER_CELL_VERTEX * (dim + 1) as f64 * cells as f64;
+    // Without /proc/meminfo, the bound of the scenario's check: one no machine passes.
+    let available = crate::resources::machine_memory().unwrap_or(1e15);
+    if needed > available {
+        return Err(MeshError::TooLarge {
+            what: what.to_string(),
+            nodes,
+            cells,
+            needed: crate::resources::human(needed),
+            available: crate::resources::human(available),
+        });
+    }
+    Ok(())
 }
 
 impl MeshError {
@@ -94,6 +139,8 @@ impl Mesh {
         if dim != 2 && dim != 3 {
             return invalid(format!("dimension {dim}: expected 2 or 3"));
         }
+        let n_cells = cells.len() / (dim + 1);
+        fits_in_memory("the mesh", dim, coords.len(), n_cells)?;
         if let Some(p) = coords.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
             return invalid(format!("node {p} has non-finite coordinates {:?}", coords[p]));
         }
