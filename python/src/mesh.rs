@@ -1,13 +1,24 @@
 //! `thermocontact.Mesh`: a simplicial mesh with named boundary parts, from NumPy arrays, a Gmsh
 //! file or a generator, always through the core's checks (`Mesh::new`).
+//!
+//! The arguments are read here, not by PyO3's conversions, because those convert too much: a
+//! float array of cells became integers by truncation (1.7 → 1), complex points became real with
+//! only NumPy's warning, and a negative cell count was an `OverflowError` that named nothing.
+//! Every refusal names the function, the argument, the value (or dtype) and what was expected:
+//! a value of the wrong type is a `TypeError`, one out of range a `MeshError` (a `ValueError`).
+//! Node indices may be integer arrays, or float arrays whose values are all integers (as
+//! `numpy.loadtxt` gives them); boolean, complex, string or object arrays are refused.
+//! Coordinates may be float or integer arrays. The generators' sizes are checked by the core
+//! (countable, within the machine's memory) before anything is allocated.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use numpy::ndarray::Array2;
-use numpy::{AllowTypeChange, PyArray, PyArray2, PyArrayLike2, PyUntypedArrayMethods};
+use numpy::{PyArray, PyArray2, PyReadonlyArray2};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict, PyString};
 use thermocontact::mesh::{self, Mesh};
 
 use crate::errors;
@@ -39,16 +50,195 @@ impl PyMesh {
     }
 }
 
-/// Node indices of an integer array, each checked non-negative; `what` names the array.
-fn indices(py: Python<'_>, array: &PyArrayLike2<'_, i64, AllowTypeChange>, what: &str) -> PyResult<Vec<usize>> {
-    let view = array.as_array();
-    view.iter()
-        .map(|&i| {
-            usize::try_from(i).map_err(|_| {
-                errors::mesh_error(py, mesh::MeshError::Invalid(format!("{what}: negative node index {i}")))
-            })
+/// `object` as a 2D NumPy array (`numpy.asarray`), with its dtype's kind (`'i'`, `'f'`, ...);
+/// `what` names the argument.
+fn array2<'py>(object: &Bound<'py, PyAny>, what: &str) -> PyResult<(Bound<'py, PyAny>, String, [usize; 2])> {
+    let py = object.py();
+    let array = py.import("numpy")?.call_method1("asarray", (object,)).map_err(|e| {
+        invalid(
+            py,
+            format!("{what}: {} cannot be read as an array ({e})", describe(object)),
+        )
+    })?;
+    let dtype = array.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    match shape[..] {
+        [rows, columns] => Ok((array, kind, [rows, columns])),
+        _ => Err(invalid(
+            py,
+            format!("{what}: an array of shape {shape:?} ({dtype}), expected a 2D array"),
+        )),
+    }
+}
+
+/// "an int (42)", "a str ('x')": the type and, if short, the repr of a Python value.
+pub fn describe(object: &Bound<'_, PyAny>) -> String {
+    let name = object
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into());
+    let article = if name.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    match object.repr() {
+        Ok(repr) if repr.to_string().chars().count() <= 40 => format!("{article} {name} ({repr})"),
+        _ => format!("{article} {name}"),
+    }
+}
+
+/// Node indices (0-based) from an integer array, or a float array of integral values; `what`
+/// names the argument. Returns the indices, row-major, and the shape.
+fn indices(object: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<usize>, [usize; 2])> {
+    let py = object.py();
+    let (array, kind, shape) = array2(object, what)?;
+    let negative = |i: &dyn std::fmt::Display| invalid(py, format!("{what}: negative node index {i}"));
+    let nodes = match kind.as_str() {
+        "i" => {
+            let array: PyReadonlyArray2<'_, i64> = array.call_method1("astype", ("int64",))?.extract()?;
+            let view = array.as_array();
+            view.iter()
+                .map(|&i| usize::try_from(i).map_err(|_| negative(&i)))
+                .collect::<PyResult<Vec<_>>>()?
+        }
+        "u" => {
+            let array: PyReadonlyArray2<'_, u64> = array.call_method1("astype", ("uint64",))?.extract()?;
+            let view = array.as_array();
+            view.iter().map(|&i| i as usize).collect()
+        }
+        "f" => {
+            let array: PyReadonlyArray2<'_, f64> = array.call_method1("astype", ("float64",))?.extract()?;
+            let view = array.as_array();
+            let mut nodes = Vec::with_capacity(view.len());
+            for ((row, column), &x) in view.indexed_iter() {
+                if x < 0.0 {
+                    return Err(negative(&x));
+                }
+                // Below 2⁵³ every integer is exact, and far beyond any node count.
+                if !(x.fract() == 0.0 && x < 9.007_199_254_740_992e15) {
+                    return Err(invalid(
+                        py,
+                        format!(
+                            "{what}: {x} at [{row}, {column}] is not a node index, expected integer node \
+                             indices (0-based; a float array is taken only if all its values are integers)"
+                        ),
+                    ));
+                }
+                nodes.push(x as usize);
+            }
+            nodes
+        }
+        _ => {
+            return Err(PyTypeError::new_err(format!(
+                "{what}: an array of dtype {}, expected integer node indices (0-based)",
+                array.getattr("dtype")?
+            )))
+        }
+    };
+    Ok((nodes, shape))
+}
+
+/// Node coordinates from a float or integer array, rows of `width` ≤ 3 padded with zeros;
+/// `what` names the argument. Complex, boolean, string or object arrays are refused.
+fn coordinates(object: &Bound<'_, PyAny>, what: &str) -> PyResult<(Vec<[f64; 3]>, [usize; 2])> {
+    let (array, kind, shape) = array2(object, what)?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(PyTypeError::new_err(format!(
+            "{what}: an array of dtype {}, expected real coordinates (a float array)",
+            array.getattr("dtype")?
+        )));
+    }
+    let array: PyReadonlyArray2<'_, f64> = array.call_method1("astype", ("float64",))?.extract()?;
+    let width = shape[1].min(3);
+    let coords = array
+        .as_array()
+        .rows()
+        .into_iter()
+        .map(|row| {
+            let mut x = [0.0; 3];
+            for (k, &c) in row.iter().take(width).enumerate() {
+                x[k] = c;
+            }
+            x
         })
-        .collect()
+        .collect();
+    Ok((coords, shape))
+}
+
+/// A count argument `name` of `function`: a Python or NumPy integer (not a bool, not a float)
+/// of at least `min`.
+fn count(function: &str, name: &str, object: &Bound<'_, PyAny>, min: usize) -> PyResult<usize> {
+    let py = object.py();
+    let expected = if min == 1 {
+        "a positive integer".to_string()
+    } else {
+        format!("an integer ≥ {min}")
+    };
+    let index = if object.is_instance_of::<PyBool>() {
+        None
+    } else {
+        py.import("operator")?.call_method1("index", (object,)).ok()
+    };
+    let Some(index) = index else {
+        return Err(PyTypeError::new_err(format!(
+            "{function}: {name} is {}, expected {expected}",
+            describe(object)
+        )));
+    };
+    match index.extract::<i64>().ok().and_then(|n| usize::try_from(n).ok()) {
+        Some(n) if n >= min => Ok(n),
+        _ => Err(invalid(
+            py,
+            format!("{function}: {name} = {index}, expected {expected}"),
+        )),
+    }
+}
+
+/// A length argument `name` of `function`: a real number (not a bool), finite and positive.
+fn length(function: &str, name: &str, object: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let expected = "a positive finite length";
+    let value = match object.is_instance_of::<PyBool>() {
+        true => None,
+        false => object.extract::<f64>().ok(),
+    };
+    match value {
+        None => Err(PyTypeError::new_err(format!(
+            "{function}: {name} is {}, expected {expected} (a float)",
+            describe(object)
+        ))),
+        Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Some(x) => Err(invalid(
+            object.py(),
+            format!("{function}: {name} = {x}, expected {expected}"),
+        )),
+    }
+}
+
+/// The three items of a sequence argument `name` of `function` (`Mesh.box`'s lengths and cells).
+fn triple<'py>(function: &str, name: &str, object: &Bound<'py, PyAny>) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    let items = object
+        .try_iter()
+        .and_then(|items| items.collect::<PyResult<Vec<_>>>())
+        .ok()
+        .filter(|items| items.len() == 3 && !object.is_instance_of::<PyString>());
+    items.ok_or_else(|| {
+        PyTypeError::new_err(format!(
+            "{function}: {name} is {}, expected a sequence of 3 numbers (x, y, z)",
+            describe(object)
+        ))
+    })
+}
+
+/// A generator's error, with the call that asked for the mesh.
+fn generated(py: Python<'_>, call: String, error: mesh::MeshError) -> PyErr {
+    match error {
+        // Its message names the shape; the call names the arguments.
+        mesh::MeshError::TooLarge { .. } | mesh::MeshError::Invalid(_) => invalid(py, format!("{call}: {error}")),
+        other => errors::mesh_error(py, other),
+    }
 }
 
 fn invalid(py: Python<'_>, message: String) -> PyErr {
@@ -61,28 +251,25 @@ impl PyMesh {
     #[pyo3(signature = (points, cells, boundary = None))]
     fn new(
         py: Python<'_>,
-        points: PyArrayLike2<'_, f64, AllowTypeChange>,
-        cells: PyArrayLike2<'_, i64, AllowTypeChange>,
+        points: &Bound<'_, PyAny>,
+        cells: &Bound<'_, PyAny>,
         boundary: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let nodes_per_cell = cells.shape()[1];
-        let dim = nodes_per_cell.wrapping_sub(1);
+        let (cells, cells_shape) = indices(cells, "cells")?;
+        let dim = cells_shape[1].wrapping_sub(1);
         if dim != 2 && dim != 3 {
             return Err(invalid(
                 py,
-                format!(
-                    "cells: shape {:?}, expected (m, 3) triangles or (m, 4) tetrahedra",
-                    cells.shape()
-                ),
+                format!("cells: shape {cells_shape:?}, expected (m, 3) triangles or (m, 4) tetrahedra"),
             ));
         }
-        let width = points.shape()[1];
+        let (coords, points_shape) = coordinates(points, "points")?;
+        let width = points_shape[1];
         if width != dim && width != 3 {
             return Err(invalid(
                 py,
                 format!(
-                    "points: shape {:?}, expected (n, {dim}) for {}",
-                    points.shape(),
+                    "points: shape {points_shape:?}, expected (n, {dim}) for {}",
                     if dim == 2 {
                         "triangles (or (n, 3) with z = 0)"
                     } else {
@@ -91,41 +278,22 @@ impl PyMesh {
                 ),
             ));
         }
-        let coords: Vec<[f64; 3]> = points
-            .as_array()
-            .rows()
-            .into_iter()
-            .map(|row| {
-                let mut x = [0.0; 3];
-                x[..width].copy_from_slice(&row.to_vec());
-                x
-            })
-            .collect();
-        let cells = indices(py, &cells, "cells")?;
         let (mut facets, mut facet_parts, mut part_names) = (Vec::new(), Vec::new(), Vec::new());
         if let Some(boundary) = boundary {
             for (name, array) in boundary.iter() {
                 let name: String = name
                     .extract()
                     .map_err(|_| invalid(py, format!("boundary: part name {name}, expected a string")))?;
-                let array: PyArrayLike2<'_, i64, AllowTypeChange> = array.extract().map_err(|e| {
-                    invalid(
-                        py,
-                        format!("boundary[{name:?}]: expected a (f, {dim}) integer array of facets ({e})"),
-                    )
-                })?;
-                if array.shape()[1] != dim {
+                let what = format!("boundary[{name:?}]");
+                let (nodes, shape) = indices(&array, &what)?;
+                if shape[1] != dim {
                     return Err(invalid(
                         py,
-                        format!(
-                            "boundary[{name:?}]: shape {:?}, expected (f, {dim}): {dim} nodes per boundary facet",
-                            array.shape()
-                        ),
+                        format!("{what}: shape {shape:?}, expected (f, {dim}): {dim} nodes per boundary facet"),
                     ));
                 }
                 let part = part_names.len();
-                let nodes = indices(py, &array, &format!("boundary[{name:?}]"))?;
-                facet_parts.extend(std::iter::repeat_n(part, nodes.len() / dim));
+                facet_parts.extend(std::iter::repeat_n(part, shape[0]));
                 facets.extend(nodes);
                 part_names.push(name);
             }
@@ -161,32 +329,38 @@ impl PyMesh {
     /// Mesh.rectangle(lx, ly, nx, ny) -> Mesh: (0, lx) × (0, ly) in nx × ny cells, each cut
     /// into two triangles; parts "left", "right", "bottom", "top" (the default scenario's mesh).
     #[staticmethod]
-    fn rectangle(py: Python<'_>, lx: f64, ly: f64, nx: usize, ny: usize) -> PyResult<Self> {
-        if !(lx > 0.0 && ly > 0.0 && nx > 0 && ny > 0) {
-            return Err(invalid(
-                py,
-                format!("rectangle({lx}, {ly}, {nx}, {ny}): expected positive lengths and cell counts"),
-            ));
-        }
-        mesh::try_rectangle(lx, ly, nx, ny)
+    fn rectangle(
+        py: Python<'_>,
+        lx: &Bound<'_, PyAny>,
+        ly: &Bound<'_, PyAny>,
+        nx: &Bound<'_, PyAny>,
+        ny: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        const F: &str = "Mesh.rectangle";
+        let (lx, ly) = (length(F, "lx", lx)?, length(F, "ly", ly)?);
+        let (nx, ny) = (count(F, "nx", nx, 1)?, count(F, "ny", ny, 1)?);
+        py.detach(|| mesh::try_rectangle(lx, ly, nx, ny))
             .map(PyMesh::wrap)
-            .map_err(|e| errors::mesh_error(py, e))
+            .map_err(|e| generated(py, format!("{F}(lx={lx}, ly={ly}, nx={nx}, ny={ny})"), e))
     }
 
     /// Mesh.box(lengths, cells) -> Mesh: the box (0, L₁) × (0, L₂) × (0, L₃) in n₁ × n₂ × n₃
     /// hexahedra of 6 tetrahedra each; parts "x-", "x+", "y-", "y+", "z-", "z+".
     #[staticmethod]
     #[pyo3(name = "box")]
-    fn cuboid(py: Python<'_>, lengths: [f64; 3], cells: [usize; 3]) -> PyResult<Self> {
-        if !(lengths.iter().all(|&l| l > 0.0) && cells.iter().all(|&n| n > 0)) {
-            return Err(invalid(
-                py,
-                format!("box({lengths:?}, {cells:?}): expected positive lengths and cell counts"),
-            ));
+    fn cuboid(py: Python<'_>, lengths: &Bound<'_, PyAny>, cells: &Bound<'_, PyAny>) -> PyResult<Self> {
+        const F: &str = "Mesh.box";
+        let mut l = [0.0; 3];
+        for (i, item) in triple(F, "lengths", lengths)?.iter().enumerate() {
+            l[i] = length(F, &format!("lengths[{i}]"), item)?;
         }
-        mesh::try_cuboid(lengths, cells)
+        let mut n = [0; 3];
+        for (i, item) in triple(F, "cells", cells)?.iter().enumerate() {
+            n[i] = count(F, &format!("cells[{i}]"), item, 1)?;
+        }
+        py.detach(|| mesh::try_cuboid(l, n))
             .map(PyMesh::wrap)
-            .map_err(|e| errors::mesh_error(py, e))
+            .map_err(|e| generated(py, format!("{F}(lengths={l:?}, cells={n:?})"), e))
     }
 
     /// Mesh.annulus(inner_radius, outer_radius, n_radial, n_around) -> Mesh: a ring of
@@ -194,23 +368,28 @@ impl PyMesh {
     #[staticmethod]
     fn annulus(
         py: Python<'_>,
-        inner_radius: f64,
-        outer_radius: f64,
-        n_radial: usize,
-        n_around: usize,
+        inner_radius: &Bound<'_, PyAny>,
+        outer_radius: &Bound<'_, PyAny>,
+        n_radial: &Bound<'_, PyAny>,
+        n_around: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
-        if !(inner_radius > 0.0 && outer_radius > inner_radius && n_radial > 0 && n_around >= 3) {
+        const F: &str = "Mesh.annulus";
+        let a = length(F, "inner_radius", inner_radius)?;
+        let b = length(F, "outer_radius", outer_radius)?;
+        if b <= a {
             return Err(invalid(
                 py,
-                format!(
-                    "annulus({inner_radius}, {outer_radius}, {n_radial}, {n_around}): expected 0 < inner < outer, \
-                     n_radial ≥ 1, n_around ≥ 3"
-                ),
+                format!("{F}: outer_radius = {b}, expected more than inner_radius = {a}"),
             ));
         }
-        mesh::try_annulus(inner_radius, outer_radius, n_radial, n_around)
+        let n_radial = count(F, "n_radial", n_radial, 1)?;
+        let n_around = count(F, "n_around", n_around, 3)?;
+        py.detach(|| mesh::try_annulus(a, b, n_radial, n_around))
             .map(PyMesh::wrap)
-            .map_err(|e| errors::mesh_error(py, e))
+            .map_err(|e| {
+                let call = format!("{F}(inner_radius={a}, outer_radius={b}, n_radial={n_radial}, n_around={n_around})");
+                generated(py, call, e)
+            })
     }
 
     /// Space dimension d (2 or 3).

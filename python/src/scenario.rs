@@ -6,13 +6,14 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyMapping};
 use thermocontact::mesh::Mesh;
 use thermocontact::Scenario;
 use toml::Table;
 
-use crate::mesh::PyMesh;
+use crate::mesh::{describe, PyMesh};
 use crate::{errors, values};
 
 /// A complete, validated scenario (the paper's Section 6 example by default).
@@ -60,17 +61,30 @@ impl PyScenario {
     }
 }
 
-/// `key=value` overrides from a mapping of dotted keys to Python values.
-fn assignments(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+/// `key=value` overrides from a mapping of dotted keys to Python values; `function` names the
+/// method in the errors (a non-mapping or a non-string key is a `TypeError` naming `overrides`).
+fn assignments(function: &str, overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
     let Some(overrides) = overrides else {
         return Ok(Vec::new());
     };
-    let mapping = overrides.cast::<PyMapping>()?;
+    let mapping = overrides.cast::<PyMapping>().map_err(|_| {
+        PyTypeError::new_err(format!(
+            "{function}: overrides is {}, expected a mapping of dotted keys to values, such as \
+             {{\"mesh.nx\": 32}}",
+            describe(overrides)
+        ))
+    })?;
     mapping
         .items()?
         .iter()
         .map(|item| {
-            let (key, value): (String, Bound<'_, PyAny>) = item.extract()?;
+            let (key, value): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item.extract()?;
+            let key: String = key.extract().map_err(|_| {
+                PyTypeError::new_err(format!(
+                    "{function}: overrides has a key that is {}, expected dotted key strings such as \"mesh.nx\"",
+                    describe(&key)
+                ))
+            })?;
             values::assignment(&key, &value)
         })
         .collect()
@@ -86,7 +100,7 @@ impl PyScenario {
         overrides: Option<&Bound<'_, PyAny>>,
         mesh: Option<PyRef<'_, PyMesh>>,
     ) -> PyResult<Self> {
-        let overrides = assignments(overrides)?;
+        let overrides = assignments("Scenario", overrides)?;
         PyScenario::load(py, text, &overrides, mesh.map(|m| m.inner.clone()))
     }
 
@@ -102,7 +116,7 @@ impl PyScenario {
     #[staticmethod]
     #[pyo3(name = "load", signature = (path, overrides = None))]
     fn load_file(py: Python<'_>, path: PathBuf, overrides: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let overrides = assignments(overrides)?;
+        let overrides = assignments("Scenario.load", overrides)?;
         py.detach(|| Scenario::load_file(&path, &overrides))
             .map(|inner| PyScenario { inner, given: None })
             .map_err(|e| errors::to_py(py, &e))
@@ -120,7 +134,7 @@ impl PyScenario {
         mesh: PyRef<'_, PyMesh>,
         overrides: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let overrides = assignments(overrides)?;
+        let overrides = assignments("Scenario.with_mesh", overrides)?;
         let mut table = self.table();
         table.remove("geometry");
         table.remove("mesh");
@@ -131,7 +145,7 @@ impl PyScenario {
     /// sc.update(mapping): sets several keys at once (validated together), e.g.
     /// sc.update({"mesh.nx": 32, "mesh.ny": 8}).
     fn update(&mut self, py: Python<'_>, overrides: &Bound<'_, PyAny>) -> PyResult<()> {
-        let overrides = assignments(Some(overrides))?;
+        let overrides = assignments("Scenario.update", Some(overrides))?;
         *self = self.with_overrides(py, &overrides)?;
         Ok(())
     }

@@ -1,6 +1,10 @@
 //! Scenario values between Python and TOML: `sc["mesh.nx"] = 64` becomes the override
 //! `mesh.nx=64` of the command line's `--set`, so that a value set from Python meets exactly the
 //! checks a scenario file or `--set` meets; `sc["mesh.nx"]` reads the TOML back.
+//!
+//! A value is read recursively, to at most [`MAX_DEPTH`] levels of lists and dicts: without a
+//! bound a self-referencing list (`a = []; a.append(a)`) or one nested 10⁵ deep overflowed the
+//! stack and killed the interpreter. No scenario key takes more than a few levels.
 
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
@@ -8,11 +12,32 @@ use toml::{Table, Value};
 
 use crate::errors;
 
+/// The deepest nesting of lists and dicts in a value (the same bound as an expression's nesting
+/// in the core, which is 100: this one is lower because each level is a native stack frame of
+/// several PyO3 calls).
+pub const MAX_DEPTH: usize = 64;
+
 /// A Python value as TOML: bool, int, float, str, os.PathLike (a string), dict (a table), list
 /// or tuple (an array); NumPy arrays and scalars through `tolist()`. `key` names the value in
-/// errors.
+/// errors. A value nested deeper than [`MAX_DEPTH`] (a self-referencing one) is refused.
 pub fn to_toml(key: &str, object: &Bound<'_, PyAny>) -> PyResult<Value> {
+    nested(key, key, object, 0)
+}
+
+/// [`to_toml`] of `object` at `key` (`root[1].name`), `depth` levels below the value of `root`.
+fn nested(root: &str, key: &str, object: &Bound<'_, PyAny>, depth: usize) -> PyResult<Value> {
     let py = object.py();
+    if depth > MAX_DEPTH {
+        return Err(errors::invalid(
+            py,
+            root,
+            &format!("lists or dicts nested more than {MAX_DEPTH} levels deep (at {key:.80}…)"),
+            &format!(
+                "a value of at most {MAX_DEPTH} levels of nested lists and dicts (a list or dict that \
+                 contains itself never ends)"
+            ),
+        ));
+    }
     if object.is_instance_of::<PyBool>() {
         return Ok(Value::Boolean(object.extract()?));
     }
@@ -34,7 +59,7 @@ pub fn to_toml(key: &str, object: &Bound<'_, PyAny>) -> PyResult<Value> {
             let name: String = name
                 .extract()
                 .map_err(|_| errors::invalid(py, key, &name.to_string(), "a table with string keys"))?;
-            let value = to_toml(&format!("{key}.{name}"), &value)?;
+            let value = nested(root, &format!("{key}.{name}"), &value, depth + 1)?;
             table.insert(name, value);
         }
         return Ok(Value::Table(table));
@@ -43,17 +68,17 @@ pub fn to_toml(key: &str, object: &Bound<'_, PyAny>) -> PyResult<Value> {
         let items = object
             .try_iter()?
             .enumerate()
-            .map(|(i, item)| to_toml(&format!("{key}[{i}]"), &item?))
+            .map(|(i, item)| nested(root, &format!("{key}[{i}]"), &item?, depth + 1))
             .collect::<PyResult<Vec<_>>>()?;
         return Ok(Value::Array(items));
     }
     if object.hasattr("tolist")? {
         // NumPy arrays and scalars.
-        return to_toml(key, &object.call_method0("tolist")?);
+        return nested(root, key, &object.call_method0("tolist")?, depth + 1);
     }
     if object.hasattr("__fspath__")? {
         let path = py.import("os")?.call_method1("fspath", (object,))?;
-        return to_toml(key, &path);
+        return nested(root, key, &path, depth + 1);
     }
     Err(errors::invalid(
         py,

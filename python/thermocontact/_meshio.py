@@ -10,7 +10,9 @@ sets of facets (line blocks in 2D, triangle blocks in 3D):
 
 Sets without facets (a domain group, say) are skipped. With ``prune``, nodes that no cell uses
 (Gmsh lists geometry points such as a circle's centre) are dropped and the rest renumbered, as
-the .msh reader does. Everything is then checked by the core (Mesh(...)).
+the .msh reader does. Everything is then checked by the core (Mesh(...)), which refuses points
+that are not real numbers and cells that are not integers, naming them. Something that is not a
+meshio mesh is a TypeError naming the argument, not an AttributeError from deep inside.
 """
 
 import numpy as np
@@ -21,12 +23,30 @@ _FACET = {2: "line", 3: "triangle"}
 
 def _blocks(mesh):
     """(type, data) of each cell block (meshio 4 and 5 spell them differently)."""
-    return [(block.type, np.asarray(block.data)) for block in mesh.cells]
+    try:
+        return [(block.type, np.asarray(block.data)) for block in mesh.cells]
+    except (AttributeError, TypeError):
+        raise TypeError(
+            f"Mesh.from_meshio: mesh.cells is {_describe(mesh.cells)}, expected meshio cell blocks "
+            "(each with .type and .data)"
+        ) from None
+
+
+def _describe(value):
+    """'an int (42)': the type and, if short, the repr of a value."""
+    name = type(value).__name__
+    article = "an" if name[:1] in "aeiou" else "a"
+    text = repr(value)
+    return f"{article} {name} ({text})" if len(text) <= 40 else f"{article} {name}"
 
 
 def from_meshio(mesh, prune=True):
     from ._thermocontact import Mesh, MeshError
 
+    if not (hasattr(mesh, "points") and hasattr(mesh, "cells")):
+        raise TypeError(
+            f"Mesh.from_meshio: mesh is {_describe(mesh)}, expected a meshio.Mesh (with .points and .cells)"
+        )
     blocks = _blocks(mesh)
     types = {t for t, _ in blocks}
     dim = 3 if "tetra" in types else 2 if "triangle" in types else None
@@ -66,12 +86,15 @@ def from_meshio(mesh, prune=True):
                 if parts:
                     boundary[name] = np.concatenate(parts)
 
-    points = np.asarray(mesh.points, dtype=np.float64)
-    if dim == 2 and points.shape[1] == 3:
+    # No dtype here: Mesh(...) refuses complex points by name, where a cast would drop the
+    # imaginary part with only a warning.
+    points = np.asarray(mesh.points)
+    if dim == 2 and points.ndim == 2 and points.shape[1] == 3:
         if np.any(points[:, 2] != 0.0):
             raise MeshError("invalid mesh: a triangle mesh with nodes off the plane z = 0")
         points = points[:, :2]
-    if prune:
+    # Cells that are not integers are left for Mesh(...) to refuse by name.
+    if prune and cells.dtype.kind in "iu":
         used = np.zeros(len(points), dtype=bool)
         used[cells.ravel()] = True
         if not used.all():

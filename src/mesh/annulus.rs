@@ -23,8 +23,8 @@ pub fn annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: 
     try_annulus(inner_radius, outer_radius, n_radial, n_around).expect("a generated mesh is valid")
 }
 
-/// [`annulus`], with its conditions (0 < a < b, a cell across, three around) and the checks of
-/// [`Mesh::new`] (cells so thin that they count as degenerate, as a ring of b/a ≈ 10¹² makes
+/// [`annulus`], with its conditions (0 < a < b, a cell across, three around), the size checks
+/// of every generator (countable, within the machine's memory) and the checks of [`Mesh::new`] (cells so thin that they count as degenerate, as a ring of b/a ≈ 10¹² makes
 /// them) returned as an error.
 pub fn try_annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_around: usize) -> Result<Mesh, MeshError> {
     if !(n_radial > 0 && n_around >= 3 && 0.0 < inner_radius && inner_radius < outer_radius) {
@@ -33,6 +33,8 @@ pub fn try_annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_arou
              0 < a < b, a cell across and three around"
         )));
     }
+    // The checks of the rectangle of n_radial × n_around cells, whose nodes are a few more.
+    super::structured::grid_nodes("an annulus", &[n_radial, n_around], 2, 6)?;
     let node = |i: usize, j: usize| i + (j % n_around) * (n_radial + 1);
     let mut coords = Vec::with_capacity((n_radial + 1) * n_around);
     for j in 0..n_around {
@@ -78,6 +80,12 @@ mod tests {
         assert!(matches!(e, MeshError::Degenerate { .. }), "{e}");
         assert!(try_annulus(2.0, 1.0, 1, 64).is_err());
         assert!(try_annulus(1.0, 2.0, 1, 2).is_err());
+        // Uncountable (the node count overflowed) or beyond the memory (issue 26): errors
+        // before any allocation.
+        let e = try_annulus(1.0, 2.0, usize::MAX, 64).unwrap_err();
+        assert!(e.to_string().contains("too many"), "{e}");
+        let e = try_annulus(1.0, 2.0, 1 << 20, 1 << 20).unwrap_err();
+        assert!(matches!(e, MeshError::TooLarge { .. }), "{e}");
     }
 
     #[test]

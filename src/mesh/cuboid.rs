@@ -58,7 +58,7 @@ pub fn cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Mesh {
 /// its longest edge³; for cells of sides h, h, H that is H/h beyond about 4·10⁵) that they count
 /// as degenerate.
 pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshError> {
-    let nodes = super::structured::grid_nodes("box", &cells, 24)?;
+    let nodes = super::structured::grid_nodes("a box", &cells, 6, 24)?;
     let [n1, n2, n3] = cells;
     let node = |ijk: [usize; 3]| ijk[0] + (n1 + 1) * (ijk[1] + (n2 + 1) * ijk[2]);
     let mut coords = Vec::with_capacity(nodes);
@@ -201,6 +201,14 @@ mod tests {
         assert!(try_cuboid([1.0; 3], [1, 0, 1]).is_err());
         // The worst shape at an aspect ratio of 1e4 (two short sides) is still a valid mesh.
         assert!(try_cuboid([1e-3, 1e-3, 10.0], [1, 1, 1]).is_ok());
+    }
+
+    /// 10¹² nodes, countable but beyond any machine (issue 26): an error before any allocation.
+    #[test]
+    fn boxes_beyond_the_memory_are_errors_before_allocating() {
+        let e = try_cuboid([1.0; 3], [10_000; 3]).unwrap_err();
+        assert!(matches!(e, MeshError::TooLarge { .. }), "{e}");
+        assert!(e.to_string().contains("10000 × 10000 × 10000 cells"), "{e}");
     }
 
     #[test]

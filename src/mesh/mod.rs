@@ -12,7 +12,9 @@
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 //!
-//! Depends on: `resources` (reading input files within limits); the bottom layer.
+//! Depends on: [`crate::resources`] only (reading input files within limits, and the machine's
+//! memory, which every constructor checks a mesh against before building it:
+//! [`MeshError::TooLarge`]); the bottom layer.
 
 mod annulus;
 pub mod chains;

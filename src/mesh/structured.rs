@@ -2,22 +2,35 @@
 
 use super::{Mesh, MeshError};
 
-/// The nodes of a structured grid of `cells` cells per direction, checked: at least one cell
-/// per direction, and the nodes times `per_node` (a bound on the entries the generator stores
-/// per node) countable in a `usize`. `what` names the grid in the error.
-pub(super) fn grid_nodes(what: &str, cells: &[usize], per_node: usize) -> Result<usize, MeshError> {
+/// The nodes of a structured grid of `cells` cells per direction, each cut into
+/// `simplices_per_cell` triangles or tetrahedra, checked before anything is allocated: at least
+/// one cell per direction; the nodes times `per_node` (a bound on the entries the generator
+/// stores per node) countable in a `usize`; and the mesh within the machine's memory
+/// ([`super::check::fits_in_memory`], the check every constructor shares). `what` names the grid
+/// in the error, with its article ("a rectangle").
+pub(super) fn grid_nodes(
+    what: &str,
+    cells: &[usize],
+    simplices_per_cell: usize,
+    per_node: usize,
+) -> Result<usize, MeshError> {
     let shape = cells.iter().map(usize::to_string).collect::<Vec<_>>().join(" × ");
+    let what = format!("{what} of {shape} cells");
     if cells.contains(&0) {
         return Err(MeshError::Invalid(format!(
-            "a {what} of {shape} cells: it needs at least one cell per direction"
+            "{what}: it needs at least one cell per direction"
         )));
     }
     let counted = cells
         .iter()
         .try_fold(1usize, |nodes, &n| nodes.checked_mul(n.checked_add(1)?));
-    counted
+    let nodes = counted
         .filter(|n| n.checked_mul(per_node).is_some())
-        .ok_or_else(|| MeshError::Invalid(format!("a {what} of {shape} cells: too many to count")))
+        .ok_or_else(|| MeshError::Invalid(format!("{what}: too many to count")))?;
+    // Fewer than the nodes times `per_node`, which is countable.
+    let simplices = cells.iter().product::<usize>().saturating_mul(simplices_per_cell);
+    super::check::fits_in_memory(&what, cells.len(), nodes, simplices)?;
+    Ok(nodes)
 }
 
 /// Boundary part names of [`rectangle`], in part-index order.
@@ -47,7 +60,7 @@ pub fn rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Mesh {
 /// non-finite or non-positive length, or cells so elongated (a cell's area ≤ 1e-12 × its
 /// longest edge², an aspect ratio beyond about 5·10¹¹) that they count as degenerate.
 pub fn try_rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<Mesh, MeshError> {
-    let nodes = grid_nodes("rectangle", &[nx, ny], 6)?;
+    let nodes = grid_nodes("a rectangle", &[nx, ny], 2, 6)?;
     let node = |i: usize, j: usize| i + j * (nx + 1);
     let mut coords = Vec::with_capacity(nodes);
     for j in 0..=ny {
@@ -111,6 +124,23 @@ mod tests {
         assert!(e.to_string().contains("too many"), "{e}");
         assert!(try_rectangle(1.0, 1.0, 0, 2).is_err());
         assert!(try_rectangle(1e-3, 10.0, 1, 1).is_ok(), "an aspect ratio of 1e4");
+    }
+
+    /// 10¹⁰ nodes (issue 26): refused before the 240 GB of coordinates are asked for, which
+    /// aborted the process (and a Python interpreter with it).
+    #[test]
+    fn rectangles_beyond_the_memory_are_errors_before_allocating() {
+        let e = try_rectangle(1.0, 1.0, 100_000, 100_000).unwrap_err();
+        assert!(matches!(e, MeshError::TooLarge { .. }), "{e}");
+        let message = e.to_string();
+        assert!(
+            message.contains("100000 × 100000 cells") && message.contains("memory"),
+            "{message}"
+        );
+        // 2 × 10¹¹ cells: countable, but far beyond any machine (every size of the message is
+        // a count, not an allocation).
+        let e = try_rectangle(1.0, 1.0, 1 << 20, 1 << 20).unwrap_err();
+        assert!(matches!(e, MeshError::TooLarge { .. }), "{e}");
     }
 
     #[test]
