@@ -20,7 +20,7 @@ pub enum Error {
     #[error("`{key}` is no longer a scenario key: {instead}")]
     RemovedKey { key: String, instead: String },
     /// A scenario value outside its admissible range or of the wrong type.
-    #[error("invalid value for `{key}`: {value} (expected {expected})")]
+    #[error("invalid value for `{key}`: {} (expected {expected})", shortened(value))]
     InvalidValue {
         key: String,
         value: String,
@@ -129,4 +129,16 @@ impl From<crate::time::TimeError> for Error {
             other => Error::Time(other),
         }
     }
+}
+
+/// A value as an error shows it: whole up to 160 characters, else its start and end around the
+/// number of characters left out (a 100 kB expression is not echoed to the terminal).
+fn shortened(value: &str) -> String {
+    let n = value.chars().count();
+    if n <= 160 {
+        return value.to_string();
+    }
+    let head: String = value.chars().take(100).collect();
+    let tail: String = value.chars().skip(n - 40).collect();
+    format!("{head}…[{} characters]…{tail}", n - 140)
 }

@@ -117,6 +117,11 @@ fn messages_name_the_key_the_value_and_the_file() {
     let e = error("friction.bound={constant=1, rate=2, slope=3}");
     assert!(e.contains("`slope`"), "{e}");
 
+    // A 100 kB expression is named with its limit, and not echoed whole.
+    let long = vec!["x"; 52_000].join("+");
+    let e = error(&format!("loads.body_force=[\"{long}\", \"0\"]"));
+    assert!(e.contains("`loads.body_force`") && e.contains("4096") && e.len() < 1000, "{}", &e[..200]);
+
     let dir = scratch("messages");
     let file = dir.join("broken.toml");
     std::fs::write(&file, "[time]\nsteps = [1,\n").unwrap();
