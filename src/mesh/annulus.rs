@@ -60,7 +60,7 @@ pub fn try_annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_arou
         facets.extend_from_slice(&[node(n_radial, j), node(n_radial, j + 1)]);
         facet_parts.push(1);
     }
-    Mesh::new(
+    Mesh::generated(
         2,
         coords,
         cells,

@@ -109,7 +109,7 @@ pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshErro
             }
         }
     }
-    Mesh::new(
+    Mesh::generated(
         3,
         coords,
         tets,

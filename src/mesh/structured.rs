@@ -91,7 +91,7 @@ pub fn try_rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<Mesh, Mes
         push(node(i, 0), node(i + 1, 0), 2);
         push(node(i, ny), node(i + 1, ny), 3);
     }
-    Mesh::new(
+    Mesh::generated(
         2,
         coords,
         cells,
