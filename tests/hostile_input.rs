@@ -120,7 +120,11 @@ fn messages_name_the_key_the_value_and_the_file() {
     // A 100 kB expression is named with its limit, and not echoed whole.
     let long = vec!["x"; 52_000].join("+");
     let e = error(&format!("loads.body_force=[\"{long}\", \"0\"]"));
-    assert!(e.contains("`loads.body_force`") && e.contains("4096") && e.len() < 1000, "{}", &e[..200]);
+    assert!(
+        e.contains("`loads.body_force`") && e.contains("4096") && e.len() < 1000,
+        "{}",
+        e.chars().take(200).collect::<String>()
+    );
 
     let dir = scratch("messages");
     let file = dir.join("broken.toml");

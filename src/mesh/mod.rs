@@ -27,7 +27,7 @@ mod structured;
 pub(crate) mod topology;
 
 pub use annulus::{annulus, annulus_part_names, try_annulus};
-pub use check::MeshError;
+pub use check::{fits_in_memory, MeshError};
 pub use cuboid::{cuboid, cuboid_part_names, try_cuboid};
 pub use gmsh::{msh_text, read_msh};
 pub use structured::{rectangle, rectangle_part_names, try_rectangle};
