@@ -9,27 +9,14 @@
 //! (`THERMOCONTACT_FUZZ_SEED` picks another sequence). The scenario generator is
 //! `tests/fuzz_scenarios.rs`.
 
+mod common;
+
 use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use common::{fuzz_seeds, panic_message, quietly, Rng};
 use std::path::{Path, PathBuf};
 
 use thermocontact::mesh::{self, msh_text, read_msh};
-
-/// SplitMix64, as in `tests/fuzz_scenarios.rs`.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 fn meshes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/meshes")
@@ -221,11 +208,7 @@ fn case(seed: u64, originals: &[(String, Vec<u8>)], dir: &Path) -> Result<Outcom
         Ok(Ok(outcome)) => Ok(outcome),
         Ok(Err(why)) => Err(format!("seed {seed} ({name}): {why}")),
         Err(panic) => {
-            let message = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
+            let message = panic_message(&*panic);
             Err(format!("seed {seed} ({name}): panicked: {message}"))
         }
     }
@@ -233,21 +216,12 @@ fn case(seed: u64, originals: &[(String, Vec<u8>)], dir: &Path) -> Result<Outcom
 
 #[test]
 fn mutated_mesh_files_end_in_a_clean_error_or_a_valid_mesh() {
-    let cases: u64 = std::env::var("THERMOCONTACT_FUZZ_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(400);
-    let first: u64 = std::env::var("THERMOCONTACT_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
+    let seeds = fuzz_seeds(400);
+    let cases = seeds.end - seeds.start;
     let dir = std::env::temp_dir().join(format!("thermocontact-fuzz-meshes-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let originals = originals();
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let results: Vec<Result<Outcome, String>> = (first..first + cases).map(|s| case(s, &originals, &dir)).collect();
-    std::panic::set_hook(hook);
+    let results: Vec<Result<Outcome, String>> = quietly(|| seeds.map(|s| case(s, &originals, &dir)).collect());
     let _ = std::fs::remove_dir_all(&dir);
     let count = |o: Outcome| results.iter().filter(|r| r.as_ref().ok() == Some(&o)).count();
     let (refused, read) = (count(Outcome::Refused), count(Outcome::Read));

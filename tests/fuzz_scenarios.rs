@@ -7,33 +7,16 @@
 //! `THERMOCONTACT_FUZZ_CASES=100000 cargo test --release --test fuzz_scenarios`
 //! (`THERMOCONTACT_FUZZ_SEED` picks another sequence).
 
+mod common;
+
 use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use common::{fuzz_seeds, panic_message, quietly, Rng};
 
 use thermocontact::Scenario;
 use toml::{Table, Value};
 
 const PAPER_3D: &str = include_str!("../scenarios/paper3d.toml");
-
-/// SplitMix64: a tiny, well-mixed and reproducible sequence (no dependency for a test).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-
-    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
-        &items[self.below(items.len())]
-    }
-}
 
 /// Values a user (or an attacker) might type.
 fn value(rng: &mut Rng) -> Value {
@@ -248,11 +231,7 @@ fn case(seed: u64) -> Result<Outcome, String> {
         Ok(Ok(outcome)) => Ok(outcome),
         Ok(Err(why)) => Err(format!("seed {seed}: {why}\n{text}")),
         Err(panic) => {
-            let message = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
+            let message = panic_message(&*panic);
             Err(format!("seed {seed}: panicked: {message}\n{text}"))
         }
     }
@@ -260,19 +239,10 @@ fn case(seed: u64) -> Result<Outcome, String> {
 
 #[test]
 fn mutated_scenarios_end_in_a_clean_error_or_a_finite_run() {
-    let cases: u64 = std::env::var("THERMOCONTACT_FUZZ_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(300);
-    let first: u64 = std::env::var("THERMOCONTACT_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
-    // Panics are caught and reported with their case; keep the default hook quiet meanwhile.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let results: Vec<Result<Outcome, String>> = (first..first + cases).map(case).collect();
-    std::panic::set_hook(hook);
+    let seeds = fuzz_seeds(300);
+    let cases = seeds.end - seeds.start;
+    // Panics are caught and reported with their case; the default hook is quiet meanwhile.
+    let results: Vec<Result<Outcome, String>> = quietly(|| seeds.map(case).collect());
     let count = |o: Outcome| results.iter().filter(|r| r.as_ref().ok() == Some(&o)).count();
     let (refused, large, failed, ran) = (
         count(Outcome::Refused),

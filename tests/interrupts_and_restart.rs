@@ -12,8 +12,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
+use common::{assert_no_temporary_files, bin, same_bytes, steps_without_seconds, summary, wait_for};
 use thermocontact::driver::{self, Restart, RunOptions, StopFlag, CHECKPOINT_FILE};
 use thermocontact::{Error, Interruption};
 
@@ -23,10 +24,6 @@ fn scratch(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("thermocontact-i26-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
-}
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_thermocontact"))
 }
 
 /// `thermocontact run --quiet ARGS`, its output captured.
@@ -45,10 +42,6 @@ fn text(output: &Output) -> String {
 fn ok(output: Output) -> Output {
     assert!(output.status.success(), "{}", text(&output));
     output
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }
 
 fn names(dir: &Path, keep: impl Fn(&str) -> bool) -> Vec<String> {
@@ -73,44 +66,6 @@ fn pvd_files(dir: &Path) -> Vec<String> {
     files
 }
 
-fn same_bytes(a: &Path, b: &Path, names: &[String]) {
-    assert!(!names.is_empty());
-    for name in names {
-        let (x, y) = (
-            std::fs::read(a.join(name)).unwrap(),
-            std::fs::read(b.join(name)).unwrap(),
-        );
-        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
-    }
-}
-
-/// The lines of `steps.csv` without the `seconds` column (the one that depends on the machine).
-fn steps_without_seconds(dir: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(dir.join("steps.csv")).unwrap();
-    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
-    text.lines()
-        .map(|line| {
-            let mut cells: Vec<&str> = line.split(',').collect();
-            cells.remove(seconds);
-            cells.join(",")
-        })
-        .collect()
-}
-
-/// Waits until `path` exists (a process writes it), at most two minutes.
-fn wait_for(path: &Path) {
-    let start = Instant::now();
-    while !path.exists() {
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "{} never appeared",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 fn signal(child: &std::process::Child, name: &str) {
     let sent = Command::new("kill")
         .arg(name)
@@ -123,14 +78,10 @@ fn signal(child: &std::process::Child, name: &str) {
 /// The whole output of a run (frames, contact CSVs, steps.csv) equals the uninterrupted run's.
 fn assert_same_run(whole: &Path, dir: &Path) {
     let frames = names(whole, |n| n.ends_with(".vtu") || n.starts_with("contact_"));
+    assert!(!frames.is_empty());
     assert_eq!(names(dir, |n| n.ends_with(".vtu") || n.starts_with("contact_")), frames);
     same_bytes(whole, dir, &frames);
     assert_eq!(steps_without_seconds(dir), steps_without_seconds(whole));
-}
-
-fn assert_no_temporary_files(dir: &Path) {
-    let temporary = names(dir, |n| n.contains(".tmp-"));
-    assert!(temporary.is_empty(), "{temporary:?}");
 }
 
 /// Finding 11: a second Ctrl-C, sent while the run still finishes the step of the first, used

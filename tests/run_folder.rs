@@ -5,9 +5,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
 
-use common::coarse;
+use common::{assert_no_temporary_files, bin, coarse, same_bytes, steps_without_seconds, summary, wait_for};
 use thermocontact::driver::{self, OutputPlan, Restart, RunOptions, RunStatus, StopFlag, CHECKPOINT_FILE};
 use thermocontact::step::SolverParams;
 use thermocontact::{Error, Interruption, Scenario};
@@ -34,15 +33,6 @@ fn pvd_files(dir: &Path) -> Vec<String> {
         .collect()
 }
 
-/// No half-written file (`*.tmp-*`, `output::write_atomic`'s) is left in `dir`.
-fn assert_no_temporary_files(dir: &Path) {
-    let temporary: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().contains(".tmp-"))
-        .collect();
-    assert!(temporary.is_empty(), "{temporary:?}");
-}
-
 fn vtu_files(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
@@ -51,20 +41,6 @@ fn vtu_files(dir: &Path) -> Vec<String> {
         .collect();
     names.sort();
     names
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
-}
-
-fn same_bytes(a: &Path, b: &Path, names: &[String]) {
-    for name in names {
-        let (x, y) = (
-            std::fs::read(a.join(name)).unwrap(),
-            std::fs::read(b.join(name)).unwrap(),
-        );
-        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
-    }
 }
 
 /// Output every second step of the coarse example, so that frames fall before and after a stop.
@@ -219,20 +195,6 @@ fn a_stopped_run_keeps_its_frames_and_continues_to_the_bits_of_the_uninterrupted
     }
 }
 
-/// The lines of `steps.csv` without the `seconds` column (the one that depends on the machine).
-fn steps_without_seconds(dir: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(dir.join("steps.csv")).unwrap();
-    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let seconds = header.iter().position(|c| *c == "seconds").unwrap();
-    text.lines()
-        .map(|line| {
-            let mut cells: Vec<&str> = line.split(',').collect();
-            cells.remove(seconds);
-            cells.join(",")
-        })
-        .collect()
-}
-
 /// A checkpoint of `problem` at step 3, written into `dir` by a run stopped there.
 fn whole_checkpoint(problem: &thermocontact::Problem, plan: &OutputPlan, dir: &Path) -> PathBuf {
     let stop = StopFlag::new();
@@ -248,23 +210,6 @@ fn whole_checkpoint(problem: &thermocontact::Problem, plan: &OutputPlan, dir: &P
         }
     });
     scratch_dir.join(CHECKPOINT_FILE)
-}
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_thermocontact"))
-}
-
-/// Waits until `path` exists (a process writes it), at most a minute.
-fn wait_for(path: &Path) {
-    let start = Instant::now();
-    while !path.exists() {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "{} never appeared",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
 }
 
 /// The CLI under signals: SIGTERM stops after the step with exit code 143 and a complete
