@@ -1005,11 +1005,23 @@ fn too_large(text: &str, what: &'static str, limit: usize) -> ExpressionError {
     }
 }
 
-/// A parse error at byte offset `at`, reported as a 1-based column.
+/// A parse error at byte offset `at`, reported as a 1-based column. A text longer than 120
+/// characters is shown as the 40 characters on each side of the column (a 4 kB formula is not
+/// echoed whole).
 fn parse_error(text: &str, at: usize, message: &str) -> ExpressionError {
     let column = text[..at].chars().count() + 1;
+    let n = text.chars().count();
+    let shown = if n <= 120 {
+        text.to_string()
+    } else {
+        let from = (column - 1).saturating_sub(40);
+        let excerpt: String = text.chars().skip(from).take(80).collect();
+        let before = if from > 0 { "…" } else { "" };
+        let after = if from + 80 < n { "…" } else { "" };
+        format!("{before}{excerpt}{after}")
+    };
     ExpressionError::Parse {
-        text: text.to_string(),
+        text: shown,
         message: format!("{message} (column {column})"),
     }
 }
@@ -1196,6 +1208,10 @@ mod tests {
                 other => panic!("{text}: expected a parse error, got {other:?}"),
             }
         }
+        // A long text is shown around the column only.
+        let long = format!("{}+)+{}", vec!["x"; 1000].join("+"), vec!["y"; 100].join("+"));
+        let e = Expression::parse(&long).unwrap_err().to_string();
+        assert!(e.len() < 300 && e.contains("column 2001") && e.contains("x+)+y"), "{e}");
     }
 
     #[test]
