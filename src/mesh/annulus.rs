@@ -60,13 +60,14 @@ pub fn try_annulus(inner_radius: f64, outer_radius: f64, n_radial: usize, n_arou
         facets.extend_from_slice(&[node(n_radial, j), node(n_radial, j + 1)]);
         facet_parts.push(1);
     }
-    Mesh::generated(
+    Mesh::checked(
         2,
         coords,
         cells,
         facets,
         facet_parts,
         annulus_part_names().iter().map(|s| s.to_string()).collect(),
+        super::check::Overlaps::Skip,
     )
 }
 

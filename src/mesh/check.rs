@@ -128,12 +128,21 @@ impl MeshError {
     }
 }
 
+/// Whether [`Mesh::checked`] searches for cells that overlap without a common face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Overlaps {
+    Search,
+    /// For the generators, whose cells tile their shape by construction.
+    Skip,
+}
+
 impl Mesh {
     /// A mesh from its parts, checked: d = 2 or 3; finite coordinates (z = 0 in 2D); cells of
     /// d + 1 and facets of d valid node indices; no degenerate cell; every node in some cell; every
     /// face shared by at most two cells, lying on opposite sides of it (no inverted or
-    /// overlapping cells); no cell's centre inside another cell (overlaps without a common face); every boundary-part facet the face of exactly one cell; distinct part
-    /// names. The boundary facets are then oriented outward. Cells may have either orientation.
+    /// overlapping cells); no cell's centre inside another cell (overlaps without a common
+    /// face); every boundary-part facet the face of exactly one cell; distinct part names. The
+    /// boundary facets are then oriented outward. Cells may have either orientation.
     pub fn new(
         dim: usize,
         coords: Vec<[f64; 3]>,
@@ -142,31 +151,20 @@ impl Mesh {
         facet_parts: Vec<usize>,
         part_names: Vec<String>,
     ) -> Result<Mesh, MeshError> {
-        Self::checked(dim, coords, cells, facets, facet_parts, part_names, true)
+        Self::checked(dim, coords, cells, facets, facet_parts, part_names, Overlaps::Search)
     }
 
-    /// [`Mesh::new`] for the generators' meshes, without the overlap search (about 1 s at 10⁶
-    /// tetrahedra): their cells tile the box or the ring by construction, and the generators'
-    /// meshes pass the search in its tests (`overlap::tests`). Every other check runs.
-    pub(super) fn generated(
+    /// [`Mesh::new`], or for the generators' meshes without the overlap search (about 1 s at
+    /// 10⁶ tetrahedra): their cells tile the box or the ring by construction, and their meshes
+    /// pass the search in its tests (`overlap::tests`). Every other check runs.
+    pub(super) fn checked(
         dim: usize,
         coords: Vec<[f64; 3]>,
         cells: Vec<usize>,
         facets: Vec<usize>,
         facet_parts: Vec<usize>,
         part_names: Vec<String>,
-    ) -> Result<Mesh, MeshError> {
-        Self::checked(dim, coords, cells, facets, facet_parts, part_names, false)
-    }
-
-    fn checked(
-        dim: usize,
-        coords: Vec<[f64; 3]>,
-        cells: Vec<usize>,
-        facets: Vec<usize>,
-        facet_parts: Vec<usize>,
-        part_names: Vec<String>,
-        search_overlaps: bool,
+        overlaps: Overlaps,
     ) -> Result<Mesh, MeshError> {
         let invalid = |message: String| Err(MeshError::Invalid(message));
         if dim != 2 && dim != 3 {
@@ -218,7 +216,7 @@ impl Mesh {
         mesh.check_cells()?;
         let faces = topology::cell_faces(&mesh);
         topology::check_cells(&mesh, &faces)?;
-        if search_overlaps {
+        if overlaps == Overlaps::Search {
             overlap::check_overlap(&mesh)?;
         }
         topology::orient_boundary(&mut mesh, &faces)?;

@@ -109,13 +109,14 @@ pub fn try_cuboid(lengths: [f64; 3], cells: [usize; 3]) -> Result<Mesh, MeshErro
             }
         }
     }
-    Mesh::generated(
+    Mesh::checked(
         3,
         coords,
         tets,
         facets,
         facet_parts,
         cuboid_part_names().iter().map(|s| s.to_string()).collect(),
+        super::check::Overlaps::Skip,
     )
 }
 

@@ -12,7 +12,7 @@
 //! parallel. A box of 1.06·10⁶ tetrahedra takes 1.1 s on the 2-core machine (release; about
 //! 22 grid entries per cell; `cargo test --release --lib mesh::overlap -- --ignored`), so the
 //! generators, whose cells tile their box or ring by construction, skip it
-//! ([`Mesh::generated`]); read and user-built meshes pass through it.
+//! ([`Mesh::checked`]); read and user-built meshes pass through it.
 //!
 //! **What it does not see.** Two cells whose overlap contains neither centre (a sliver grazing
 //! a neighbour it shares no face with). The cases users produce (a stray cell across a part, a

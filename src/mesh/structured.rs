@@ -91,13 +91,14 @@ pub fn try_rectangle(lx: f64, ly: f64, nx: usize, ny: usize) -> Result<Mesh, Mes
         push(node(i, 0), node(i + 1, 0), 2);
         push(node(i, ny), node(i + 1, ny), 3);
     }
-    Mesh::generated(
+    Mesh::checked(
         2,
         coords,
         cells,
         facets,
         facet_parts,
         rectangle_part_names().iter().map(|s| s.to_string()).collect(),
+        super::check::Overlaps::Skip,
     )
 }
 
