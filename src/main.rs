@@ -885,6 +885,17 @@ fn print_summary(s: &Summary) {
             )
         );
     }
+    if s.pressure_iterations > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "contact-pressure iterates (per step)",
+            format!(
+                "{} ({:.2})",
+                s.pressure_iterations,
+                s.pressure_iterations as f64 / s.steps as f64
+            )
+        );
+    }
     let deepest = s.cutbacks.iter().map(|c| c.depth).max().unwrap_or(0);
     println!(
         "{:<34} {:>12}",

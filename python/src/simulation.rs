@@ -341,6 +341,8 @@ pub struct PyState {
     info: Option<PyStepInfo>,
     /// The slip distances after and before the step (the contact table reads them).
     slip_distance: [Vec<f64>; 2],
+    /// The contact pressures (Coulomb friction; empty otherwise).
+    pressure: Vec<f64>,
     problem: Arc<Problem>,
     slip_tolerance: f64,
     contact: PyOnceLock<Py<PyContact>>,
@@ -372,6 +374,7 @@ impl PyState {
             xi: matrix(py, state.xi, d - 1).unbind(),
             info: info.map(PyStepInfo::from),
             slip_distance: [state.slip_distance, state.slip_distance_before],
+            pressure: state.pressure,
             problem,
             slip_tolerance,
             contact,
@@ -394,6 +397,7 @@ impl PyState {
             xi: vector(self.xi.bind(py).as_any())?,
             slip_distance: self.slip_distance[0].clone(),
             slip_distance_before: self.slip_distance[1].clone(),
+            pressure: self.pressure.clone(),
         })
     }
 }
@@ -435,10 +439,12 @@ impl PyState {
 ///
 /// node     -- (c,) int64 mesh node;          x        -- (c, d) position;
 /// normal   -- (c, d) outward normal ν;        tangents -- (c, d − 1, d) tangent basis;
-/// w_tau    -- (c, d − 1) tangential velocity in the node's tangent coordinates;
+/// w_tau    -- (c, d − 1) slip relative to the foundation, w_τ − v_F,τ, in the node's tangent
+///             coordinates (the tangential velocity where the foundation is at rest);
 /// xi       -- (c, d − 1) friction stress ξ, likewise;
 /// bound    -- (c,) friction bound μ(|w_τ|) S; slip -- (c,) bool, |w_τ| > slip tolerance;
-/// theta    -- (c,) temperature.
+/// theta    -- (c,) temperature; slip_distance -- (c,) where a law weakens with it, else None;
+/// pressure -- (c,) contact pressure p where a law scales with it (Coulomb), else None.
 ///
 /// table() is the table of the command line's contact_NNNN.csv (columns: Contact.columns).
 #[pyclass(name = "Contact", module = "thermocontact", frozen)]
@@ -464,6 +470,9 @@ pub struct PyContact {
     /// s, the slip distance so far, where a friction law weakens with it (`None` otherwise).
     #[pyo3(get)]
     slip_distance: Option<Py<PyArray1<f64>>>,
+    /// p, the contact pressure, where a friction law scales with it (`None` otherwise).
+    #[pyo3(get)]
+    pressure: Option<Py<PyArray1<f64>>>,
     dim: usize,
     rows: Vec<ContactRow>,
 }
@@ -493,6 +502,8 @@ impl PyContact {
             theta: column(&|r| r.theta),
             slip_distance: (rows.first().is_some_and(|r| r.slip_distance.is_some()))
                 .then(|| column(&|r| r.slip_distance.unwrap_or(0.0))),
+            pressure: (rows.first().is_some_and(|r| r.pressure.is_some()))
+                .then(|| column(&|r| r.pressure.unwrap_or(0.0))),
             dim,
             rows,
         }
@@ -503,6 +514,12 @@ impl PyContact {
     /// Whether the rows carry the slip distance (a law weakens with it).
     fn with_slip_distance(&self) -> bool {
         self.rows.first().is_some_and(|r| r.slip_distance.is_some())
+    }
+
+    /// The columns of table(), as in the contact CSV files.
+    fn header(&self) -> Vec<&'static str> {
+        let pressure = self.rows.first().is_some_and(|r| r.pressure.is_some());
+        contact_csv_header(self.dim, self.with_slip_distance(), pressure)
     }
 }
 
@@ -517,7 +534,7 @@ impl PyContact {
     /// Column names of table(), as in the contact CSV files.
     #[getter]
     fn columns(&self) -> Vec<&'static str> {
-        contact_csv_header(self.dim, self.with_slip_distance())
+        self.header()
     }
 
     /// The table of the command line's contact_NNNN.csv: (c, len(columns)) float64, slip as
@@ -527,7 +544,7 @@ impl PyContact {
         matrix(
             py,
             rows.concat(),
-            contact_csv_header(self.dim, self.with_slip_distance()).len(),
+            self.header().len(),
         )
     }
 

@@ -123,6 +123,33 @@ impl FrictionLaw for Tresca {
     }
 }
 
+/// Coulomb friction: a constant coefficient μ, the bound μ p with p the contact pressure
+/// (used with [`super::NormalForce::Reaction`], which makes the scale the pressure; with a
+/// prescribed scale S it is Tresca with the bound μ S).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coulomb {
+    /// μ.
+    pub coefficient: f64,
+}
+
+impl FrictionLaw for Coulomb {
+    fn bound(&self, scale: f64, _: &LawPoint, _r: f64) -> f64 {
+        self.coefficient * scale
+    }
+    fn bound_derivative(&self, _: f64, _: &LawPoint, _r: f64) -> f64 {
+        0.0
+    }
+    fn potential(&self, scale: f64, _: &LawPoint, r: f64) -> f64 {
+        self.coefficient * scale * r
+    }
+    fn name(&self) -> &'static str {
+        "coulomb"
+    }
+    fn constants(&self, _: &LawPoint) -> (f64, f64) {
+        (self.coefficient, 0.0)
+    }
+}
+
 /// μ(r) from a table of coefficients at slip rates (a tribometer's curve): piecewise linear,
 /// constant beyond the first and last rates ([`Table`]).
 #[derive(Debug, Clone, PartialEq)]

@@ -6,6 +6,7 @@
 //! Depends on: [`crate::mesh`] (the normals and tangents of the contact nodes), [`crate::loads`]
 //! (the expressions of the user's laws).
 
+pub mod foundation;
 pub mod frames;
 pub mod friction;
 pub mod heat;
@@ -13,8 +14,9 @@ pub mod table;
 
 #[allow(deprecated)]
 pub use friction::SlipWeakening;
+pub use foundation::{Foundation, NormalForce};
 pub use friction::{
-    project_to_ball, ExpressionFriction, FrictionLaw, LawPoint, SlipDistanceWeakening, TabulatedFriction, Tresca,
+    project_to_ball, Coulomb, ExpressionFriction, FrictionLaw, LawPoint, SlipDistanceWeakening, TabulatedFriction, Tresca,
     VelocityWeakening,
 };
 pub use heat::{

@@ -229,6 +229,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             max_convexification_per_step: tally.max_convexification_per_step,
             newton_iterations: tally.newton_iterations,
             exchange_iterations: tally.exchange_iterations,
+            pressure_iterations: tally.pressure_iterations,
             fallback_steps: tally.fallback_steps,
             descent_steps: tally.descent_steps,
             descent_sweeps: tally.descent_sweeps,
@@ -259,12 +260,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
 /// The law is the one the step solved (its time, the slip distances before it).
 fn law_residual(problem: &Problem, state: &State, slip_tolerance: f64) -> (f64, usize) {
     let tangential = problem.dim() - 1;
-    let w_tau = crate::model::contact_tangential(problem, &state.w);
     let mut worst: f64 = 0.0;
     let mut slip = 0;
     let Ok(laws) = crate::model::ContactLaws::of_state(problem, state) else {
         return (f64::NAN, 0);
     };
+    let w_tau = laws.slip(&state.w);
     let chunks = w_tau.chunks_exact(tangential).zip(state.xi.chunks_exact(tangential));
     for (i, (w, xi)) in chunks.enumerate() {
         worst = worst.max(crate::contact::friction::law_residual(

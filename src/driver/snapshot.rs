@@ -42,10 +42,12 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
 }
 
 /// Header of the contact CSV files: position, outward normal ν, (3D: the first tangent t₁; in
-/// 2D t = ν turned by +90°), w_τ and ξ in the node's tangent coordinates, the friction bound,
-/// slip (1) or stick (0), θ; and the slip distance s where a law weakens with it
-/// (`slip_distance`).
-pub fn contact_csv_header(dim: usize, slip_distance: bool) -> Vec<&'static str> {
+/// 2D t = ν turned by +90°), w_τ and ξ in the node's tangent coordinates (w_τ is the slip
+/// relative to the foundation, w_τ − v_F,τ: the velocity itself where the foundation is at
+/// rest), the friction bound, slip (1) or stick (0), θ; the slip distance s where a law weakens
+/// with it (`slip_distance`), and the contact pressure p where a law scales with it
+/// (`pressure`).
+pub fn contact_csv_header(dim: usize, slip_distance: bool, pressure: bool) -> Vec<&'static str> {
     let mut header = if dim == 2 {
         vec!["x", "y", "nu_x", "nu_y", "w_tau", "xi", "bound", "slip", "theta"]
     } else {
@@ -56,6 +58,9 @@ pub fn contact_csv_header(dim: usize, slip_distance: bool) -> Vec<&'static str> 
     };
     if slip_distance {
         header.push("slip_distance");
+    }
+    if pressure {
+        header.push("pressure");
     }
     header
 }
@@ -73,6 +78,7 @@ pub fn contact_csv_rows(dim: usize, rows: &[ContactRow]) -> Vec<Vec<f64>> {
             v.extend_from_slice(&r.xi);
             v.extend([r.bound, if r.slip { 1.0 } else { 0.0 }, r.theta]);
             v.extend(r.slip_distance);
+            v.extend(r.pressure);
             v
         })
         .collect()
@@ -89,7 +95,7 @@ pub(super) fn write_snapshot(
     let d = problem.dim();
     if plan.csv {
         let path = dir.join(format!("contact{}csv", frame_tag(state.n)));
-        let header = contact_csv_header(d, problem.uses_slip_distance());
+        let header = contact_csv_header(d, problem.uses_slip_distance(), problem.pressure.is_some());
         output::write_csv(&path, &header, &contact_csv_rows(d, &record.contact))?;
     }
     if plan.vtk {
@@ -98,15 +104,17 @@ pub(super) fn write_snapshot(
         let von_mises = fields::von_mises(&stress);
         let (status, friction) = fields::nodal_contact_fields(problem, &record.contact);
         let mut slip_distance = vec![0.0; problem.mesh.n_nodes()];
+        let mut pressure = vec![0.0; problem.mesh.n_nodes()];
         for row in &record.contact {
             slip_distance[row.node] = row.slip_distance.unwrap_or(0.0);
+            pressure[row.node] = row.pressure.unwrap_or(0.0);
         }
         let grid = Grid {
             dim: d,
             points: &problem.mesh.coords,
             cells: &problem.mesh.cells,
         };
-        let point_fields = [
+        let mut point_fields = vec![
             Field {
                 name: "displacement",
                 n_components: d,
@@ -132,14 +140,23 @@ pub(super) fn write_snapshot(
                 n_components: d,
                 values: &friction,
             },
-            Field {
+        ];
+        // The slip distance only where a law weakens with it, the contact pressure only where
+        // a law scales with it (the other runs' files stay as they were).
+        if problem.uses_slip_distance() {
+            point_fields.push(Field {
                 name: "slip_distance",
                 n_components: 1,
                 values: &slip_distance,
-            },
-        ];
-        // The slip distance only where a law weakens with it (the files stay as they were).
-        let point_fields = &point_fields[..point_fields.len() - usize::from(!problem.uses_slip_distance())];
+            });
+        }
+        if problem.pressure.is_some() {
+            point_fields.push(Field {
+                name: "contact_pressure",
+                n_components: 1,
+                values: &pressure,
+            });
+        }
         let cell_fields = [
             Field {
                 name: "stress",
@@ -157,7 +174,7 @@ pub(super) fn write_snapshot(
         } else {
             Compression::None
         };
-        output::write_vtu(&dir.join(&file), &grid, point_fields, &cell_fields, compression)?;
+        output::write_vtu(&dir.join(&file), &grid, &point_fields, &cell_fields, compression)?;
         pvd.push(PvdEntry { time: record.t, file });
     }
     Ok(())

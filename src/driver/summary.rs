@@ -130,6 +130,10 @@ pub struct Summary {
     /// affine: in the step matrix).
     #[serde(skip_serializing_if = "is_zero")]
     pub exchange_iterations: usize,
+    /// Iterates of the fixed point on the contact pressure over all steps (Coulomb friction;
+    /// 0 otherwise).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub pressure_iterations: usize,
     /// Peak resident memory of the process at the end of the run (Linux), MiB.
     pub peak_memory_mib: Option<f64>,
     /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
@@ -403,6 +407,9 @@ pub struct Tally {
     /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
     #[serde(default)]
     pub exchange_iterations: usize,
+    /// Iterates of the fixed point on the contact pressure, over all steps.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub pressure_iterations: usize,
     /// Full solves with the step matrix in the time loop, over every part of the run (a
     /// continued run adds its own to those of its checkpoint; 0 in checkpoints from before
     /// they were kept).
@@ -439,6 +446,7 @@ impl Tally {
         self.descent_sweeps += info.descent_sweeps;
         self.krylov_iterations += info.krylov_iterations;
         self.exchange_iterations += info.exchange_iterations;
+        self.pressure_iterations += info.pressure_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);
         self.steps.push(record);
     }

@@ -36,13 +36,14 @@ pub struct ContactRow {
     /// The node's tangent basis t_1 … t_{d−1} (2D: ν turned by +90°, the x direction for the
     /// paper's Γ_C).
     pub tangents: Vec<[f64; 3]>,
-    /// w_τ in the node's tangent coordinates (d − 1).
+    /// w_τ − v_F,τ, the slip relative to the foundation, in the node's tangent coordinates
+    /// (d − 1): w_τ itself where the foundation is at rest.
     pub w_tau: Vec<f64>,
     /// ξ, the friction stress, in the node's tangent coordinates (d − 1).
     pub xi: Vec<f64>,
     /// The friction bound μ(|w_τ|) S at this node.
     pub bound: f64,
-    /// |w_τ| > slip tolerance.
+    /// |w_τ − v_F,τ| > slip tolerance.
     pub slip: bool,
     /// θ at the node.
     pub theta: f64,
@@ -50,6 +51,10 @@ pub struct ContactRow {
     /// and the outputs leave the column out).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub slip_distance: Option<f64>,
+    /// p_n, the contact pressure, where a friction law scales with it (Coulomb; `None`
+    /// otherwise, and the outputs leave the column out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<f64>,
 }
 
 impl ContactRow {
@@ -84,7 +89,10 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
     let tangential = problem.dim() - 1;
     let laws = ContactLaws::of_state(problem, state);
     let uses_slip_distance = problem.uses_slip_distance();
-    let w_tau = contact_tangential(problem, &state.w);
+    let w_tau = match &laws {
+        Ok(laws) => laws.slip(&state.w),
+        Err(_) => contact_tangential(problem, &state.w),
+    };
     problem
         .contact
         .iter()
@@ -104,6 +112,7 @@ pub fn contact_rows(problem: &Problem, state: &State, slip_tolerance: f64) -> Ve
                 slip: speed > slip_tolerance,
                 theta: state.theta[node.node],
                 slip_distance: uses_slip_distance.then(|| state.slip_distance.get(i).copied().unwrap_or(0.0)),
+                pressure: state.pressure.get(i).copied(),
             }
         })
         .collect()

@@ -59,6 +59,12 @@ pub enum ModelError {
     /// A friction scale with more than one component.
     #[error("the friction bound S must be a scalar datum, but it has {found} components")]
     FrictionScaleComponents { found: usize },
+    /// A foundation velocity datum with the wrong number of components.
+    #[error("the foundation's velocity has {found} components (expected {expected})")]
+    FoundationComponents { found: usize, expected: usize },
+    /// A foundation velocity that is not finite at a contact node.
+    #[error("the foundation's velocity is {value:?} at x = {x:?}, t = {t} (expected finite values)")]
+    BadFoundationVelocity { value: [f64; 3], x: [f64; 3], t: f64 },
     /// A friction scale that is negative or not finite at a contact node.
     #[error(
         "the friction bound S is {value} at x = {x:?}, t = {t} (expected a finite, non-negative value: friction.bound)"

@@ -6,7 +6,7 @@
 
 use super::error::ModelError as Error;
 use super::problem::Problem;
-use crate::contact::{FrictionLaw, FrictionalHeating, LawPoint};
+use crate::contact::{FrictionLaw, FrictionalHeating, LawPoint, NormalForce};
 use crate::la::vector::norm2;
 use crate::loads::Datum;
 
@@ -21,6 +21,8 @@ pub struct Friction {
     /// The contact parts it holds on (mesh part indices); empty: every contact part not named
     /// by another law.
     pub parts: Vec<usize>,
+    /// What scales μ: S (the paper), or the contact pressure (Coulomb; `scale` unused).
+    pub normal: NormalForce,
 }
 
 /// The frictional heating h_τ and the share of it that enters the body (the paper: 1).
@@ -38,8 +40,12 @@ pub struct ContactLaws<'p> {
     /// t_n.
     pub t: f64,
     points: Vec<LawPoint>,
-    /// S(x_i, t_n).
+    /// S(x_i, t_n), or p_i where the law scales with the contact pressure
+    /// ([`ContactLaws::set_pressures`]).
     scales: Vec<f64>,
+    /// v_F,τ at the contact nodes in their tangent coordinates (node-major, d − 1 per node; 0
+    /// on a coordinate held at zero); `None` where the foundation is at rest.
+    foundation: Option<Vec<f64>>,
     /// The temperatures at which a nonlinear heat exchange is evaluated this step (`None`
     /// where the exchange is affine, in the step matrix).
     pub exchange_temperature: Option<Vec<f64>>,
@@ -59,6 +65,11 @@ impl<'p> ContactLaws<'p> {
         let mut scales = Vec::with_capacity(points.len());
         for (i, at) in points.iter().enumerate() {
             let friction = &problem.friction[problem.friction_of_node[i]];
+            if friction.normal == NormalForce::Reaction {
+                // The pressure comes with each iterate (`set_pressures`); none before.
+                scales.push(0.0);
+                continue;
+            }
             let mut s = [0.0];
             friction.scale.eval(at.x, t, &mut s);
             if !s[0].is_finite() || s[0] < 0.0 {
@@ -75,14 +86,51 @@ impl<'p> ContactLaws<'p> {
             t,
             points,
             scales,
+            foundation: foundation_tangential(problem, t)?,
             exchange_temperature: None,
         })
+    }
+
+    /// Whether a law scales with the contact pressure (Coulomb): then the step iterates on it.
+    pub fn uses_pressure(&self) -> bool {
+        self.problem.pressure.is_some()
+    }
+
+    /// The contact pressures p_i at which the laws that scale with it are evaluated.
+    pub fn set_pressures(&mut self, pressures: &[f64]) {
+        for (i, &p) in pressures.iter().enumerate() {
+            if self.problem.friction[self.problem.friction_of_node[i]].normal == NormalForce::Reaction {
+                self.scales[i] = p;
+            }
+        }
+    }
+
+    /// w_τ − v_F,τ in place: tangential velocities (node-major tangent coordinates) made
+    /// relative to the foundation. Nothing happens where it is at rest.
+    pub fn make_relative(&self, w_tau: &mut [f64]) {
+        if let Some(v) = &self.foundation {
+            w_tau.iter_mut().zip(v).for_each(|(w, v)| *w -= v);
+        }
+    }
+
+    /// v_F,τ at the contact nodes (node-major tangent coordinates), `None` at rest.
+    pub fn foundation(&self) -> Option<&[f64]> {
+        self.foundation.as_deref()
+    }
+
+    /// The relative slip w_τ − v_F,τ at the contact nodes of a full velocity vector.
+    pub fn slip(&self, w_full: &[f64]) -> Vec<f64> {
+        let mut w_tau = super::contact_tangential(self.problem, w_full);
+        self.make_relative(&mut w_tau);
+        w_tau
     }
 
     /// The laws that the step to `state` solved: at its time, with the slip distances before
     /// it (what the outputs report the state against).
     pub fn of_state(problem: &'p Problem, state: &super::State) -> Result<Self, Error> {
-        Self::new(problem, state.t, &state.slip_distance_before)
+        let mut laws = Self::new(problem, state.t, &state.slip_distance_before)?;
+        laws.set_pressures(&state.pressure);
+        Ok(laws)
     }
 
     fn law(&self, i: usize) -> &dyn FrictionLaw {
@@ -318,4 +366,26 @@ impl Problem {
         }
         out
     }
+}
+
+/// v_F,τ(x_i, t) at the contact nodes in their tangent coordinates (node-major, d − 1 per node;
+/// 0 on a coordinate held at zero, which cannot follow the foundation); `None` where the
+/// foundation is at rest.
+pub fn foundation_tangential(problem: &Problem, t: f64) -> Result<Option<Vec<f64>>, Error> {
+    let Some(foundation) = &problem.foundation else {
+        return Ok(None);
+    };
+    let d = problem.dim();
+    let mut v_tau = Vec::with_capacity(problem.contact.len() * (d - 1));
+    for node in &problem.contact {
+        let x = problem.mesh.coords[node.node];
+        let v = foundation.velocity(d, x, t);
+        if v.iter().any(|c| !c.is_finite()) {
+            return Err(Error::BadFoundationVelocity { value: v, x, t });
+        }
+        for (tangent, dof) in node.tangents.iter().zip(&node.tangent_dofs) {
+            v_tau.push(dof.map_or(0.0, |_| (0..d).map(|c| tangent[c] * v[c]).sum()));
+        }
+    }
+    Ok(Some(v_tau))
 }

@@ -15,6 +15,7 @@ mod contact_rows;
 mod error;
 mod laws;
 pub mod norms;
+mod pressure;
 mod problem;
 pub mod samples;
 mod state;
@@ -22,7 +23,8 @@ mod step_matrix;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
-pub use laws::{ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
+pub use laws::{foundation_tangential, ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
+pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{

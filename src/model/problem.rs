@@ -36,9 +36,11 @@
 
 use super::error::ModelError as Error;
 use super::laws::{Friction, Heating};
+use super::pressure::ContactPressure;
 use crate::contact::frames::{contact_frames, orthogonal_complement};
 use crate::contact::{
-    FrictionLaw, FrictionalHeating, HeatExchange, LawPoint, LinearHeating, QuadraticExchange, Tresca,
+    Foundation, FrictionLaw, FrictionalHeating, HeatExchange, LawPoint, LinearHeating, NormalForce, QuadraticExchange,
+    Tresca,
 };
 use crate::fem::assembly::{self, Matrices};
 use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
@@ -150,6 +152,10 @@ pub struct Problem {
     pub friction: Vec<Friction>,
     /// The law of each contact node: an index into `friction`.
     pub friction_of_node: Vec<usize>,
+    /// The foundation's motion (`None`: at rest, the paper).
+    pub foundation: Option<Foundation>,
+    /// The rows of the contact pressure where a law scales with it ([`ContactPressure`]).
+    pub pressure: Option<ContactPressure>,
     /// The heat exchange ∂j.
     pub exchange: Box<dyn HeatExchange>,
     /// h_τ and its share.
@@ -198,8 +204,9 @@ pub struct ProblemBuilder {
     contact: Vec<String>,
     symmetry: Vec<String>,
     boundary_temperature: f64,
-    /// (part name or `None` for all, scale, law).
-    friction: Vec<(Option<String>, Datum, Box<dyn FrictionLaw>)>,
+    /// (part name or `None` for all, scale, law, what scales the law).
+    friction: Vec<GivenFriction>,
+    foundation: Option<Foundation>,
     exchange: Box<dyn HeatExchange>,
     heating: Box<dyn FrictionalHeating>,
     heat_share: f64,
@@ -209,6 +216,10 @@ pub struct ProblemBuilder {
     initial_fields: Option<(InitialFields, &'static str)>,
     extra_loads: Option<Box<dyn ExtraLoads>>,
 }
+
+/// A friction law as given to the builder: (part name or `None` for all, scale, law, what
+/// scales the law).
+type GivenFriction = (Option<String>, Datum, Box<dyn FrictionLaw>, NormalForce);
 
 /// Names of the initial data, in the order of [`ProblemBuilder`]'s `initial` slots.
 const INITIAL_NAMES: [&str; 3] = [
@@ -231,6 +242,7 @@ impl ProblemBuilder {
             symmetry: Vec::new(),
             boundary_temperature: 0.0,
             friction: Vec::new(),
+            foundation: None,
             exchange: Box::new(QuadraticExchange {
                 coefficient: 0.0,
                 foundation_temperature: 0.0,
@@ -282,8 +294,9 @@ impl ProblemBuilder {
     /// The friction law on every contact part not given its own ([`ProblemBuilder::friction_on`]):
     /// the bound S(x, t) μ(r), the scale S a datum (a number, affine in t, an expression).
     pub fn friction(mut self, scale: impl Into<Datum>, law: impl FrictionLaw + 'static) -> Self {
-        self.friction.retain(|(part, _, _)| part.is_some());
-        self.friction.push((None, scale.into(), Box::new(law)));
+        self.friction.retain(|(part, ..)| part.is_some());
+        self.friction
+            .push((None, scale.into(), Box::new(law), NormalForce::Prescribed));
         self
     }
 
@@ -291,9 +304,30 @@ impl ProblemBuilder {
     /// boxed.
     pub fn friction_boxed(mut self, part: Option<&str>, scale: Datum, law: Box<dyn FrictionLaw>) -> Self {
         if part.is_none() {
-            self.friction.retain(|(part, _, _)| part.is_some());
+            self.friction.retain(|(part, ..)| part.is_some());
         }
-        self.friction.push((part.map(String::from), scale, law));
+        self.friction
+            .push((part.map(String::from), scale, law, NormalForce::Prescribed));
+        self
+    }
+
+    /// Coulomb friction on the contact part `part` (`None`: every part not given its own): the
+    /// bound μ(r) p_i with p_i the contact pressure at node i, from the reaction of the
+    /// bilateral constraint ([`NormalForce::Reaction`], [`ContactPressure`]); `law` gives μ
+    /// (e.g. [`crate::contact::Coulomb`] for a constant coefficient).
+    pub fn friction_from_pressure(mut self, part: Option<&str>, law: Box<dyn FrictionLaw>) -> Self {
+        if part.is_none() {
+            self.friction.retain(|(part, ..)| part.is_some());
+        }
+        self.friction
+            .push((part.map(String::from), Datum::scalar(1.0), law, NormalForce::Reaction));
+        self
+    }
+
+    /// The foundation's motion (default: at rest, the paper): friction and frictional heating
+    /// act on the slip relative to it ([`crate::contact::foundation`]).
+    pub fn foundation(mut self, foundation: Foundation) -> Self {
+        self.foundation = Some(foundation);
         self
     }
 
@@ -312,8 +346,12 @@ impl ProblemBuilder {
     /// The friction law on the contact part `part` (a node shared by two parts takes the law
     /// given first).
     pub fn friction_on(mut self, part: &str, scale: impl Into<Datum>, law: impl FrictionLaw + 'static) -> Self {
-        self.friction
-            .push((Some(part.to_string()), scale.into(), Box::new(law)));
+        self.friction.push((
+            Some(part.to_string()),
+            scale.into(),
+            Box::new(law),
+            NormalForce::Prescribed,
+        ));
         self
     }
 
@@ -451,6 +489,17 @@ impl ProblemBuilder {
             .collect();
 
         let (friction, friction_of_node) = friction_of_nodes(&mesh, &parts, self.friction, &contact)?;
+        if let Some(foundation) = &self.foundation {
+            let found = foundation.datum().n_components();
+            if found != foundation.components(d) {
+                return Err(Error::FoundationComponents {
+                    found,
+                    expected: foundation.components(d),
+                });
+            }
+        }
+        let pressure = (friction.iter().any(|f| f.normal == NormalForce::Reaction))
+            .then(|| ContactPressure::new(&mesh, &matrices, &contact));
 
         let mut forces = Vec::new();
         let mut heat_sources = Vec::new();
@@ -529,6 +578,8 @@ impl ProblemBuilder {
             contact_weights,
             friction,
             friction_of_node,
+            foundation: self.foundation,
+            pressure,
             exchange: self.exchange,
             heating: Heating {
                 law: self.heating,
@@ -646,12 +697,12 @@ impl Problem {
 fn friction_of_nodes(
     mesh: &Mesh,
     parts: &BoundaryParts,
-    given: Vec<(Option<String>, Datum, Box<dyn FrictionLaw>)>,
+    given: Vec<GivenFriction>,
     contact: &[ContactNode],
 ) -> Result<(Vec<Friction>, Vec<usize>), Error> {
     let mut laws = Vec::new();
     let mut catch_all = None;
-    for (part, scale, law) in given {
+    for (part, scale, law, normal) in given {
         if scale.n_components() != 1 {
             return Err(Error::FrictionScaleComponents {
                 found: scale.n_components(),
@@ -677,6 +728,7 @@ fn friction_of_nodes(
             scale,
             law,
             parts: parts_of_law,
+            normal,
         });
     }
     if laws.is_empty() {
@@ -685,6 +737,7 @@ fn friction_of_nodes(
             scale: Datum::scalar(0.0),
             law: Box::new(Tresca),
             parts: Vec::new(),
+            normal: NormalForce::Prescribed,
         });
     }
     let mut on_part: Vec<Option<usize>> = vec![None; mesh.part_names.len()];

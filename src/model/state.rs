@@ -26,14 +26,22 @@ pub struct State {
     /// s_{n−1}: the slip distances the law of step n read (what its residual and bounds are
     /// reported against); not checkpointed.
     pub slip_distance_before: Vec<f64>,
+    /// p_n: the contact pressure at each contact node where a friction law scales with it
+    /// (Coulomb, [`super::ContactPressure`]); empty otherwise.
+    pub pressure: Vec<f64>,
 }
 
 impl State {
-    /// s_n from s_{n−1} and w_n over the step from `previous` (explicit: the step's law read
-    /// s_{n−1}).
+    /// s_n from s_{n−1} and the relative slip w_n − v_F over the step from `previous`
+    /// (explicit: the step's law read s_{n−1}).
     pub fn accumulate_slip(&mut self, problem: &Problem, previous: &State) {
         let k = self.t - previous.t;
-        let w_tau = super::contact_tangential(problem, &self.w);
+        let mut w_tau = super::contact_tangential(problem, &self.w);
+        // The relative slip: v_F = 0 (the paper) subtracts nothing. An invalid v_F has failed
+        // the step's laws before this.
+        if let Ok(Some(v)) = super::foundation_tangential(problem, self.t) {
+            w_tau.iter_mut().zip(&v).for_each(|(w, v)| *w -= v);
+        }
         let td = problem.dim() - 1;
         self.slip_distance_before = previous.slip_distance.clone();
         // An empty `previous.slip_distance` (a checkpoint older than it) reads as zeros.
@@ -54,6 +62,11 @@ impl State {
             xi: vec![0.0; problem.contact.len() * (problem.dim() - 1)],
             slip_distance: vec![0.0; problem.contact.len()],
             slip_distance_before: vec![0.0; problem.contact.len()],
+            pressure: if problem.pressure.is_some() {
+                vec![0.0; problem.contact.len()]
+            } else {
+                Vec::new()
+            },
         }
     }
 }

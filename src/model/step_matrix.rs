@@ -269,6 +269,7 @@ impl StepRhs {
             xi,
             slip_distance: Vec::new(),
             slip_distance_before: Vec::new(),
+            pressure: Vec::new(),
         };
         state.accumulate_slip(problem, previous);
         state

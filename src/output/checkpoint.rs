@@ -125,7 +125,7 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> std::io::Result<()> {
         identity: checkpoint.identity.clone(),
         n: s.n,
         t: s.t,
-        lengths: vec![s.w.len(), s.u.len(), s.theta.len(), s.xi.len(), s.slip_distance.len()],
+        lengths: arrays(s).map(|a| a.len()).collect(),
         record: checkpoint.record.clone(),
     };
     let header = serde_json::to_vec(&header).map_err(std::io::Error::other)?;
@@ -137,7 +137,7 @@ pub fn write(path: &Path, checkpoint: &Checkpoint) -> std::io::Result<()> {
         hashed.write_all(MAGIC)?;
         hashed.write_all(&(header.len() as u64).to_le_bytes())?;
         hashed.write_all(&header)?;
-        for array in [&s.w, &s.u, &s.theta, &s.xi, &s.slip_distance] {
+        for array in arrays(s) {
             let mut bytes = Vec::with_capacity(8 * array.len());
             for v in array.iter() {
                 bytes.extend_from_slice(&v.to_le_bytes());
@@ -164,6 +164,15 @@ impl Write for Hashed<'_> {
     fn flush(&mut self) -> std::io::Result<()> {
         self.inner.flush()
     }
+}
+
+/// The arrays a checkpoint stores: w, u, θ, ξ, the slip distances, and the contact pressures
+/// where a law scales with them (a sixth array only then, so that other runs' checkpoints keep
+/// their bytes).
+fn arrays(s: &State) -> impl Iterator<Item = &Vec<f64>> {
+    [&s.w, &s.u, &s.theta, &s.xi, &s.slip_distance]
+        .into_iter()
+        .chain((!s.pressure.is_empty()).then_some(&s.pressure))
 }
 
 /// Reads a checkpoint, checking its format and checksum.
@@ -193,8 +202,8 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         .ok_or_else(|| damaged("its header is longer than the file"))?;
     let header: Header = serde_json::from_slice(header_bytes).map_err(|_| damaged("its header is not valid"))?;
     at += header_len;
-    if !(4..=5).contains(&header.lengths.len()) {
-        return Err(damaged("its header does not list four or five arrays"));
+    if !(4..=6).contains(&header.lengths.len()) {
+        return Err(damaged("its header does not list four to six arrays"));
     }
     // Checked: a damaged header's lengths may overflow.
     let total = (header.lengths.iter()).try_fold(0usize, |sum, &len| sum.checked_add(len.checked_mul(8)?));
@@ -219,6 +228,7 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         xi: next(),
         slip_distance: next(),
         slip_distance_before: Vec::new(),
+        pressure: next(),
     };
     // Four arrays (a checkpoint older than the slip distances): `slip_distance` stays empty,
     // which the laws and the next step read as zeros.
@@ -281,6 +291,7 @@ mod tests {
             xi: vec![-149.99999999999997],
             slip_distance: vec![0.125],
             slip_distance_before: Vec::new(),
+            pressure: Vec::new(),
         }
     }
 

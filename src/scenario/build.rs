@@ -7,8 +7,9 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::validate::{invalid, MAX_MAGNITUDE};
-use super::{Affine, DatumSpec, FrictionSpec, HeatExchangeSpec, Scenario, Traction};
+use super::{Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, Traction};
 use crate::contact::{
+    Coulomb, Foundation,
     ExpressionExchange, ExpressionFriction, ExpressionHeating, FrictionLaw, FrictionalHeating, HeatExchange,
     LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction, Tresca,
     VelocityWeakening,
@@ -49,14 +50,36 @@ impl Scenario {
     }
 }
 
-/// The scale and the law of one friction table; errors name `key`.
-pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Datum, Box<dyn FrictionLaw>), Error> {
-    let scale = spec.bound().to_datum(&format!("{key}.bound"), 1)?;
-    if let Datum::Constant(values) = &scale {
-        if values[0] < 0.0 {
-            return Err(invalid(&format!("{key}.bound"), &values[0], "a non-negative bound S"));
+/// The scale (`None` where the law scales with the contact pressure) and the law of one
+/// friction table; errors name `key`.
+pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Option<Datum>, Box<dyn FrictionLaw>), Error> {
+    let scale = match (spec.normal(), spec.bound()) {
+        (NormalSpec::Prescribed, Some(bound)) => {
+            let scale = bound.to_datum(&format!("{key}.bound"), 1)?;
+            if let Datum::Constant(values) = &scale {
+                if values[0] < 0.0 {
+                    return Err(invalid(&format!("{key}.bound"), &values[0], "a non-negative bound S"));
+                }
+            }
+            Some(scale)
         }
-    }
+        (NormalSpec::Prescribed, None) => {
+            return Err(Error::InvalidValue {
+                key: format!("{key}.bound"),
+                value: "(missing)".to_string(),
+                expected: "the scale S of the bound μ(r) S (a datum), or normal = \"reaction\" for μ(r) p with p the contact pressure"
+                    .to_string(),
+            })
+        }
+        (NormalSpec::Reaction, Some(bound)) => {
+            return Err(invalid(
+                &format!("{key}.bound"),
+                bound,
+                "no bound with normal = \"reaction\": the bound is μ(r) p with p the contact pressure (remove `bound`, or set normal = \"prescribed\")",
+            ))
+        }
+        (NormalSpec::Reaction, None) => None,
+    };
     // The column's key (the file's, where the table came from one).
     let table_error = |from_file: bool, e: crate::contact::TableError| {
         let column = if from_file {
@@ -75,6 +98,9 @@ pub(super) fn friction_law(key: &str, spec: &FrictionSpec) -> Result<(Datum, Box
             })
         }
         FrictionSpec::Tresca { .. } => Box::new(Tresca),
+        FrictionSpec::Coulomb { coefficient, .. } => Box::new(Coulomb {
+            coefficient: *coefficient,
+        }),
         FrictionSpec::Table {
             slip_rate,
             coefficient,
@@ -232,6 +258,61 @@ impl DatumSpec {
     }
 }
 
+impl FoundationSpec {
+    /// The foundation's motion in dimension `d`: `velocity`, or a rotation about `center`
+    /// (2D) or `axis_point` and `axis` (3D) at `angular_velocity`; errors name the key.
+    pub(super) fn to_foundation(&self, d: usize) -> Result<Foundation, Error> {
+        let point = |key: &str, values: &[f64]| -> Result<[f64; 3], Error> {
+            if values.len() != d || values.iter().any(|v| !v.is_finite()) {
+                return Err(invalid(key, &format!("{values:?}"), &format!("{d} finite coordinates")));
+            }
+            let mut p = [0.0; 3];
+            p[..d].copy_from_slice(values);
+            Ok(p)
+        };
+        let rotation_keys = [
+            ("center", self.center.is_some()),
+            ("axis_point", self.axis_point.is_some()),
+            ("axis", self.axis.is_some()),
+            ("angular_velocity", self.angular_velocity.is_some()),
+        ];
+        let given: Vec<&str> = rotation_keys.iter().filter(|(_, set)| *set).map(|(k, _)| *k).collect();
+        match (&self.velocity, &self.angular_velocity) {
+            (Some(velocity), None) if given.is_empty() => {
+                Ok(Foundation::Velocity(velocity.to_datum("foundation.velocity", d)?))
+            }
+            (None, Some(omega)) => {
+                let omega = omega.to_datum("foundation.angular_velocity", 1)?;
+                let (centre, axis) = match (d, &self.center, &self.axis_point, &self.axis) {
+                    (2, Some(c), None, None) => (point("foundation.center", c)?, [0.0, 0.0, 1.0]),
+                    (3, None, Some(c), Some(a)) => (point("foundation.axis_point", c)?, point("foundation.axis", a)?),
+                    _ => {
+                        let expected = if d == 2 {
+                            "a rotation in 2D is `center` (2 coordinates) with `angular_velocity`"
+                        } else {
+                            "a rotation in 3D is `axis_point` and `axis` (3 coordinates each) with `angular_velocity`"
+                        };
+                        return Err(invalid("foundation", &format!("{{{}}}", given.join(", ")), expected));
+                    }
+                };
+                Foundation::rotation(centre, axis, omega)
+                    .ok_or_else(|| invalid("foundation.axis", &format!("{axis:?}"), "a non-zero axis"))
+            }
+            _ => {
+                let mut keys = given.clone();
+                if self.velocity.is_some() {
+                    keys.insert(0, "velocity");
+                }
+                Err(invalid(
+                    "foundation",
+                    &format!("{{{}}}", keys.join(", ")),
+                    "either `velocity` (a datum per component) or a rotation: `center` (2D) or `axis_point` and `axis` (3D), with `angular_velocity`",
+                ))
+            }
+        }
+    }
+}
+
 impl Traction {
     /// The keys the entry sets, as a user would list them: "{part, constant}".
     fn given_keys(&self) -> String {
@@ -373,11 +454,13 @@ impl Scenario {
             builder = builder.initial_fields(fields, "initial.from");
         }
         for (key, spec) in self.friction_keys() {
-            let (scale, law) = friction_law(&key, spec)?;
-            builder = match spec.part() {
-                None => builder.friction_boxed(None, scale, law),
-                Some(part) => builder.friction_boxed(Some(part), scale, law),
+            builder = match friction_law(&key, spec)? {
+                (Some(scale), law) => builder.friction_boxed(spec.part(), scale, law),
+                (None, law) => builder.friction_from_pressure(spec.part(), law),
             };
+        }
+        if let Some(foundation) = &self.foundation {
+            builder = builder.foundation(foundation.to_foundation(d)?);
         }
         let loads = &self.loads;
         builder = builder

@@ -159,6 +159,7 @@ impl Scenario {
             if let FrictionSpec::SlipWeakening {
                 part,
                 bound,
+                normal,
                 a,
                 b,
                 alpha,
@@ -167,6 +168,7 @@ impl Scenario {
                 *law = FrictionSpec::VelocityWeakening {
                     part: part.take(),
                     bound: bound.clone(),
+                    normal: *normal,
                     a: *a,
                     b: *b,
                     alpha: *alpha,

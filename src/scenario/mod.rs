@@ -27,8 +27,8 @@ mod validate;
 pub use build::differing_keys;
 pub use load::{DEFAULT_TOML, MAX_SCENARIO_BYTES};
 pub use schema::{
-    Affine, BoundarySpec, DatumSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry, HeatExchangeSpec,
-    InitialSpec, Loads, MaterialSpec, MeshSpec, OutputSpec, Pressure, Scenario, SolverSpec, Structured, TimeSpec,
+    Affine, BoundarySpec, DatumSpec, FoundationSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry, HeatExchangeSpec,
+    InitialSpec, Loads, MaterialSpec, MeshSpec, NormalSpec, OutputSpec, Pressure, Scenario, SolverSpec, Structured, TimeSpec,
     Traction,
 };
 pub use validate::{
@@ -48,7 +48,8 @@ mod tests {
             s.friction,
             FrictionSpecs::One(FrictionSpec::VelocityWeakening {
                 part: None,
-                bound: DatumSpec::Scalar(Box::new(DatumSpec::Numbers(vec![150.0]))),
+                bound: Some(DatumSpec::Scalar(Box::new(DatumSpec::Numbers(vec![150.0])))),
+                normal: None,
                 a: 1.0,
                 b: 0.2,
                 alpha: 100.0

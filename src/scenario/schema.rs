@@ -25,6 +25,9 @@ pub struct Scenario {
     pub initial: InitialSpec,
     pub loads: Loads,
     pub friction: FrictionSpecs,
+    /// The foundation's motion (absent: at rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foundation: Option<FoundationSpec>,
     pub heat_exchange: HeatExchangeSpec,
     pub frictional_heating: FrictionalHeatingSpec,
     pub solver: SolverSpec,
@@ -365,7 +368,10 @@ pub enum FrictionSpec {
     VelocityWeakening {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
         a: f64,
         b: f64,
         alpha: f64,
@@ -374,7 +380,10 @@ pub enum FrictionSpec {
     SlipWeakening {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
         a: f64,
         b: f64,
         alpha: f64,
@@ -383,13 +392,19 @@ pub enum FrictionSpec {
     Tresca {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
     },
     /// μ at slip rates, piecewise linear (inline, or the two columns of a CSV file).
     Table {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         slip_rate: Vec<f64>,
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -401,14 +416,31 @@ pub enum FrictionSpec {
     Expression {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
         coefficient: String,
+    },
+    /// Coulomb's law: a constant μ (`coefficient`), the bound μ p with p the contact pressure
+    /// (`normal` defaults to "reaction" for it).
+    Coulomb {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
+        coefficient: f64,
     },
     /// μ = μ_s − (μ_s − μ_d) min(s/D_c, 1) of the slip distance s.
     SlipDistanceWeakening {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
-        bound: DatumSpec,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bound: Option<DatumSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        normal: Option<NormalSpec>,
         #[serde(rename = "static")]
         static_coefficient: f64,
         dynamic: f64,
@@ -425,21 +457,69 @@ impl FrictionSpec {
             | FrictionSpec::Tresca { part, .. }
             | FrictionSpec::Table { part, .. }
             | FrictionSpec::Expression { part, .. }
+            | FrictionSpec::Coulomb { part, .. }
             | FrictionSpec::SlipDistanceWeakening { part, .. } => part.as_deref(),
         }
     }
 
-    /// The scale S.
-    pub fn bound(&self) -> &DatumSpec {
+    /// The scale S (absent where the law scales with the contact pressure).
+    pub fn bound(&self) -> Option<&DatumSpec> {
         match self {
             FrictionSpec::VelocityWeakening { bound, .. }
             | FrictionSpec::SlipWeakening { bound, .. }
             | FrictionSpec::Tresca { bound, .. }
             | FrictionSpec::Table { bound, .. }
             | FrictionSpec::Expression { bound, .. }
-            | FrictionSpec::SlipDistanceWeakening { bound, .. } => bound,
+            | FrictionSpec::Coulomb { bound, .. }
+            | FrictionSpec::SlipDistanceWeakening { bound, .. } => bound.as_ref(),
         }
     }
+
+    /// What scales μ: `normal` as given, else "reaction" for `coulomb` and "prescribed" for
+    /// the others.
+    pub fn normal(&self) -> NormalSpec {
+        match self {
+            FrictionSpec::VelocityWeakening { normal, .. }
+            | FrictionSpec::SlipWeakening { normal, .. }
+            | FrictionSpec::Tresca { normal, .. }
+            | FrictionSpec::Table { normal, .. }
+            | FrictionSpec::Expression { normal, .. }
+            | FrictionSpec::SlipDistanceWeakening { normal, .. } => normal.unwrap_or(NormalSpec::Prescribed),
+            FrictionSpec::Coulomb { normal, .. } => normal.unwrap_or(NormalSpec::Reaction),
+        }
+    }
+}
+
+/// What scales a friction law's coefficient μ (`friction.normal`).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum NormalSpec {
+    /// The bound is μ(r) S with S = `bound` (the paper).
+    Prescribed,
+    /// The bound is μ(r) p with p the contact pressure (Coulomb).
+    Reaction,
+}
+
+/// The foundation's motion (`[foundation]`; absent: at rest, the paper): a velocity datum, or
+/// a rigid rotation (2D: `center`; 3D: `axis_point` and `axis`) with `angular_velocity`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FoundationSpec {
+    /// v_F(x, t), d components.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<DatumSpec>,
+    /// The centre of a rotation in 2D.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<Vec<f64>>,
+    /// A point on the axis of a rotation in 3D.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis_point: Option<Vec<f64>>,
+    /// The axis of a rotation in 3D (any length; ω turns right-handed about it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<Vec<f64>>,
+    /// ω(t) of a rotation, rad/s (a scalar datum).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<DatumSpec>,
 }
 
 /// The heat exchange with the foundation, ∂j(θ) on Γ_C.

@@ -166,6 +166,7 @@ impl Scenario {
                     non_negative(&at("dynamic"), *dynamic)?;
                     positive(&at("distance"), *distance)?;
                 }
+                FrictionSpec::Coulomb { coefficient, .. } => non_negative(&at("coefficient"), *coefficient)?,
                 FrictionSpec::Tresca { .. } | FrictionSpec::Table { .. } | FrictionSpec::Expression { .. } => {}
             }
             if let (super::FrictionSpecs::Parts(_), None) = (&self.friction, spec.part()) {

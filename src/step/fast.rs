@@ -104,7 +104,9 @@ impl<'a> FastSolver<'a> {
         let t = laws.t;
         let steepness = self.steepness(laws);
         let mut free = system.free_step(problem, previous, t, laws.exchange_temperature.as_deref())?;
-        let w_free = std::mem::take(&mut free.w_free);
+        // The condensed problem in the relative slip z = w_τ − v_F: z = (w_free − v_F) + C ξ + H h.
+        let mut w_free = std::mem::take(&mut free.w_free);
+        laws.make_relative(&mut w_free);
 
         let step = CondensedStep {
             condensation: self.condensation(),
@@ -113,7 +115,8 @@ impl<'a> FastSolver<'a> {
             augmentation: self.paper.augmentation,
             lu_cache: Default::default(),
         };
-        let guess_w = contact_tangential(problem, &previous.w);
+        let mut guess_w = contact_tangential(problem, &previous.w);
+        laws.make_relative(&mut guess_w);
         let guess_xi = previous.xi.clone();
         let mut info = StepInfo::default();
         let direct = if steepness < 1.0 {

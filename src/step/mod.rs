@@ -284,6 +284,8 @@ pub struct StepInfo {
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange (0 where ∂j is affine).
     pub exchange_iterations: usize,
+    /// Iterates of the fixed point on the contact pressure (Coulomb friction; 0 otherwise).
+    pub pressure_iterations: usize,
 }
 
 impl StepInfo {
@@ -299,6 +301,7 @@ impl StepInfo {
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;
         self.exchange_iterations += other.exchange_iterations;
+        self.pressure_iterations += other.pressure_iterations;
     }
 }
 
@@ -314,6 +317,8 @@ pub enum Criterion {
     IncrementXi,
     /// (80): ‖Δζ‖_{L²(Γ_C)} / ‖ζ‖_{L²(Γ_C)}.
     IncrementZeta,
+    /// max |Δp| / max p between iterates of the fixed point on the contact pressure.
+    IncrementPressure,
     /// max |Δw_τ| / max |w_τ| between iterates on Γ_C.
     IncrementW,
     /// max |Δξ| / max friction bound between iterates on Γ_C (also the inner Uzawa loop's).
@@ -335,6 +340,7 @@ impl Criterion {
             Criterion::IncrementTheta => "relative increment of θ (78)",
             Criterion::IncrementXi => "relative increment of ξ (79)",
             Criterion::IncrementZeta => "relative increment of ζ (80)",
+            Criterion::IncrementPressure => "max |Δp| / max p (contact pressure)",
             Criterion::IncrementW => "max |Δw_τ| / max |w_τ|",
             Criterion::IncrementXiNodal => "max |Δξ| / max friction bound",
             Criterion::NodalLaw => "nodal friction-law residual / smallest bound",

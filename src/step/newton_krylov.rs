@@ -123,22 +123,35 @@ impl Linearization<'_> {
             }
             let bound = frozen[i];
             let q_norm = norm(&q[..m]);
+            // The law is on the relative slip z_i = w_i − v_F,i: stick is w_i = v_F,i, and
+            // slip's ξ_i = a + B z_i is a − B v_F,i + B w_i in the unknowns.
+            let mut v = [0.0; 2];
+            if let Some(foundation) = self.laws.foundation() {
+                for (j, &(k, _)) in node.tangent.iter().enumerate() {
+                    v[j] = foundation[range.start + k];
+                }
+            }
             if q_norm <= bound {
-                for &(_, row) in &node.tangent {
+                for (j, &(_, row)) in node.tangent.iter().enumerate() {
                     let diagonal = a.row(row).0.binary_search(&(row as u32)).expect("a diagonal entry");
-                    for (p, v) in a.row_values_mut(row).iter_mut().enumerate() {
+                    for (p, value) in a.row_values_mut(row).iter_mut().enumerate() {
                         if p != diagonal {
-                            *v = 0.0;
+                            *value = 0.0;
                         }
                     }
-                    rhs[row] = 0.0;
+                    rhs[row] = if v[j] == 0.0 {
+                        0.0
+                    } else {
+                        a.row(row).1[diagonal] * v[j]
+                    };
                 }
                 self.nodes.push(Linearized::Stick);
             } else {
                 let (a_i, b_i) =
                     slip_linearization(&wi[..m], &xii[..m], &q[..m], q_norm, bound, 0.0, node.augmentation, m);
                 for (j, &(_, row)) in node.tangent.iter().enumerate() {
-                    rhs[row] += node.weight * a_i[j];
+                    let shift: f64 = (0..m).map(|l| b_i[j][l] * v[l]).sum();
+                    rhs[row] += node.weight * (a_i[j] - shift);
                     for (l, &(_, col)) in node.tangent.iter().enumerate() {
                         let p = a
                             .row(row)
@@ -165,8 +178,10 @@ impl Linearization<'_> {
         info.newton_iterations += 1;
         info.krylov_iterations += krylov_solve(sys, (a, self.ilu), rhs, x, &mut self.residual, clock)?;
 
-        // The new iterate: w from x, ξ from the linearization (slip) or the rows (stick).
-        let new_w = tangential(&sys.nodes, td, x, w.len());
+        // The new iterate: w from x (relative to the foundation), ξ from the linearization
+        // (slip) or the rows (stick).
+        let mut new_w = tangential(&sys.nodes, td, x, w.len());
+        self.laws.make_relative(&mut new_w);
         let mut new_xi = vec![0.0; xi.len()];
         for (i, (node, lin)) in sys.nodes.iter().zip(&self.nodes).enumerate() {
             let start = i * td;
@@ -234,7 +249,8 @@ impl<'a> NewtonKrylov<'a> {
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
 
-        let w = self.tangential(&x);
+        let mut w = self.tangential(&x);
+        laws.make_relative(&mut w);
         let xi = previous.xi.clone();
         let mut info = StepInfo::default();
         let mut guard = sys.lock();

@@ -121,7 +121,7 @@ impl<'a> PaperSolver<'a> {
 /// direct path answers from the condensed compliances ([`CondensedStep`]), the iterative path
 /// by a Krylov solve of the whole step ([`super::paper_krylov`]).
 pub(super) trait LoadedStep {
-    /// w(ξ, h) on Γ_C.
+    /// w(ξ, h) on Γ_C (the paper's loop makes them relative to the foundation).
     fn velocities(&mut self, xi: &[f64], heat: &[f64], w: &mut [f64]) -> Result<(), SolveError>;
     /// The full state at (ξ, h).
     fn state(&mut self, xi: Vec<f64>, heat: &[f64]) -> Result<State, SolveError>;
@@ -168,7 +168,8 @@ pub(super) fn paper_step(
     state.n = previous.n + 1;
     state.t = t;
     state.u = previous.u.iter().zip(&previous.w).map(|(u, w)| u + k * w).collect();
-    let w = contact_tangential(problem, &previous.w);
+    let mut w = contact_tangential(problem, &previous.w);
+    laws.make_relative(&mut w);
     let heat = laws.heats(&w);
     let iterate = PaperIterate {
         state,
@@ -237,6 +238,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
         for _ in 0..self.params.max_inner {
             info.inner_iterations += 1;
             self.step.velocities(xi, heat, w)?;
+            laws.make_relative(w);
             change = 0.0;
             for i in 0..n_contact {
                 let range = i * tangential..(i + 1) * tangential;
@@ -276,6 +278,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
         }
         // The full fields of this iterate with the converged contact terms.
         self.step.velocities(xi, heat, w)?;
+        laws.make_relative(w);
         let next = self.step.state(xi.clone(), heat)?;
         let increments = relative_increments(problem, state, &next);
         info.increments = increments;

@@ -33,6 +33,10 @@ pub const COMPLIANCE_ESTIMATE_UP_TO: usize = 200_000;
 /// (in [`StepSolver::step`]).
 pub const EXCHANGE_ITERATIONS: usize = 50;
 
+/// Cap on the iterates of the fixed point on the contact pressure per step (Coulomb friction,
+/// in [`StepSolver::step`]).
+pub const PRESSURE_ITERATIONS: usize = 50;
+
 /// The linear part of a step, set up once per step size: factored (direct path) or ordered
 /// and preconditioned (iterative path), as [`SolverParams::linear`] resolves for the problem.
 pub enum LinearSystem {
@@ -112,12 +116,72 @@ impl<'a> StepSolver<'a> {
     /// fixed point on it (docs/laws.md, "Heat exchange").
     pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let (problem, _) = self.problem_and_tolerance();
-        let laws = ContactLaws::new(problem, t, &previous.slip_distance).map_err(|e| SolveError::Other(e.into()))?;
+        let mut laws = ContactLaws::new(problem, t, &previous.slip_distance).map_err(|e| SolveError::Other(e.into()))?;
+        if laws.uses_pressure() {
+            self.pressure_iteration(previous, laws)
+        } else {
+            self.step_with_exchange(previous, &mut laws)
+        }
+    }
+
+    /// One step with the laws `laws` and, where the heat exchange is nonlinear, the fixed
+    /// point on it.
+    fn step_with_exchange(&self, previous: &State, laws: &mut ContactLaws) -> Result<(State, StepInfo), SolveError> {
+        let (problem, _) = self.problem_and_tolerance();
         if problem.exchange.robin().is_some() {
-            self.step_with(previous, &laws)
+            self.step_with(previous, laws)
         } else {
             self.exchange_iteration(previous, laws)
         }
+    }
+
+    /// The step with Coulomb friction, whose bound μ(r) p_i scales with the contact pressure
+    /// p_i that the step's own solution carries ([`crate::model::ContactPressure`]): a fixed
+    /// point on p, each iterate a whole step with the bounds scaled by the previous iterate's
+    /// pressure (p⁽⁰⁾ = p_{n−1}), until p changes by at most ε_conv relative to its largest
+    /// value. This is the classic solution of Coulomb friction as a sequence of Tresca
+    /// problems (Panagiotopoulos; Haslinger, Hlaváček and Nečas), here with each iterate's
+    /// friction law nonmonotone and solved by the chosen solver, on either path. The pressure
+    /// depends on the friction stresses only through the body's shear–normal coupling
+    /// (Poisson's effect, the contact's curvature, the thermal stress), so the iterates
+    /// contract fast where that coupling is weak; beyond [`PRESSURE_ITERATIONS`] the step
+    /// fails on the pressure's increment, and the time loop cuts it back.
+    fn pressure_iteration(&self, previous: &State, mut laws: ContactLaws) -> Result<(State, StepInfo), SolveError> {
+        let (problem, tolerance) = self.problem_and_tolerance();
+        let rows = problem.pressure.as_ref().expect("a law that scales with the pressure has its rows");
+        let force = problem.force(laws.t).map_err(|e| SolveError::Other(e.into()))?;
+        let n_contact = problem.contact.len();
+        let mut pressure = if previous.pressure.len() == n_contact {
+            previous.pressure.clone()
+        } else {
+            vec![0.0; n_contact]
+        };
+        let mut total = StepInfo::default();
+        let mut change = f64::INFINITY;
+        for j in 1..=PRESSURE_ITERATIONS {
+            laws.set_pressures(&pressure);
+            let (mut state, info) = self.step_with_exchange(previous, &mut laws)?;
+            total.absorb(&info);
+            total.increments = info.increments;
+            total.pressure_iterations = j;
+            let next = rows.pressures(problem, previous, &state, &force);
+            let scale = next.iter().fold(0.0f64, |m, p| m.max(*p));
+            change = crate::la::vector::max_abs_diff(&next, &pressure) / scale.max(f64::MIN_POSITIVE);
+            if change <= tolerance {
+                state.pressure = next;
+                return Ok((state, total));
+            }
+            pressure = next;
+        }
+        Err(SolveError::NotConverged(StepFailure {
+            solver: self.algorithm(),
+            loop_name: "contact pressure",
+            iterations: PRESSURE_ITERATIONS,
+            criterion: Criterion::IncrementPressure,
+            value: change,
+            tolerance,
+            residual_history: Vec::new(),
+        }))
     }
 
     /// One step with the laws `laws`.
@@ -138,7 +202,7 @@ impl<'a> StepSolver<'a> {
     /// m_θ ℓ k/(ρ c_p |ω_i|) (the nodal heat capacity against the exchange's slope), so a few
     /// iterates suffice where the step's thermal mass dominates m_θ; beyond
     /// [`EXCHANGE_ITERATIONS`] the step fails on criterion (80), and the time loop cuts it back.
-    fn exchange_iteration(&self, previous: &State, mut laws: ContactLaws) -> Result<(State, StepInfo), SolveError> {
+    fn exchange_iteration(&self, previous: &State, laws: &mut ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let (problem, tolerance) = self.problem_and_tolerance();
         let t = laws.t;
         let mut zeta = heat_exchange_multiplier(problem, t, &previous.theta);
@@ -146,7 +210,7 @@ impl<'a> StepSolver<'a> {
         let mut total = StepInfo::default();
         let mut change = f64::INFINITY;
         for j in 1..=EXCHANGE_ITERATIONS {
-            let (state, info) = self.step_with(previous, &laws)?;
+            let (state, info) = self.step_with(previous, laws)?;
             total.absorb(&info);
             total.increments = info.increments;
             let next = heat_exchange_multiplier(problem, t, &state.theta);

@@ -325,6 +325,7 @@ pub fn manufactured_with(
                     xi: Vec::new(),
                     slip_distance: Vec::new(),
                     slip_distance_before: Vec::new(),
+                    pressure: Vec::new(),
                 };
                 norms.push(&exact_errors(&problem, &zero, &exact, t));
             }
