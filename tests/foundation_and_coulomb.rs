@@ -153,8 +153,9 @@ fn a_pad_on_a_sliding_foundation_heats_as_a_half_space_under_the_friction_power(
     assert!(fine < 0.35 * coarse, "the error falls under refinement: {coarse:e} → {fine:e}");
 }
 
-/// A block 4 × 1, free (no clamp), pressed by p on its top and sheared there by a traction
-/// rising at c per second; Coulomb friction (μ = 0.4) or a prescribed bound (Tresca, S = 100).
+/// A block 4 × 1, free (no clamp), Poisson's ratio 0 (so that its contact pressure is the load
+/// away from the edges), pressed by p on its top and sheared there by a traction rising at c
+/// per second; Coulomb friction (μ = 0.4) or a prescribed bound (Tresca, S = 100).
 /// Returns the time from which 90 % of its contact nodes slip, and the contact pressure at the
 /// middle node at the end.
 fn block(p: f64, coulomb: bool, linear: LinearKind) -> (f64, f64) {
@@ -191,13 +192,13 @@ fn block(p: f64, coulomb: bool, linear: LinearKind) -> (f64, f64) {
     let onset = (steps.iter())
         .find(|s| 10 * s.1 >= 9 * nodes)
         .map_or(f64::INFINITY, |s| s.0);
-    eprintln!("PROBE {:?}", steps.iter().map(|s| (s.0, s.1, s.2)).collect::<Vec<_>>());
     // Before the block slips, at t = 0.5 s (step 10).
     (onset, steps[9].2)
 }
 
 /// Coulomb: the onset of gross slip is where the shear c t reaches μ p, so it doubles with p;
-/// with a prescribed bound it does not move. The pressure under the block's middle is p.
+/// with a prescribed bound it does not move. The pressure under the block's middle is p
+/// (measured: 249.93 and 499.93, 0.03 % below the load, before the block slips).
 #[test]
 fn coulomb_onset_doubles_with_the_pressure_and_the_contact_pressure_is_the_load() {
     for linear in [LinearKind::Direct, LinearKind::Iterative] {
@@ -206,16 +207,11 @@ fn coulomb_onset_doubles_with_the_pressure_and_the_contact_pressure_is_the_load(
         // μ p / c = 1 s and 2 s.
         assert!((onset_1 - 1.0).abs() <= 0.2, "{linear:?}: onset at {onset_1} s (expected ≈ 1 s)");
         assert!((onset_2 / onset_1 - 2.0).abs() <= 0.2, "{linear:?}: onsets {onset_1} s, {onset_2} s");
-        assert!((pressure_1 / 250.0 - 1.0).abs() < 0.02, "{linear:?}: p = {pressure_1}");
-        assert!((pressure_2 / 500.0 - 1.0).abs() < 0.02, "{linear:?}: p = {pressure_2}");
+        assert!((pressure_1 / 250.0 - 1.0).abs() < 2e-3, "{linear:?}: p = {pressure_1}");
+        assert!((pressure_2 / 500.0 - 1.0).abs() < 2e-3, "{linear:?}: p = {pressure_2}");
         let (tresca_1, _) = block(250.0, false, linear);
         let (tresca_2, _) = block(500.0, false, linear);
         assert!((tresca_1 - 1.0).abs() <= 0.2, "{linear:?}: Tresca onset at {tresca_1} s (expected ≈ 1 s)");
         assert_eq!(tresca_1, tresca_2, "{linear:?}: a prescribed bound ignores the pressure");
     }
-}
-#[test]
-fn zz_probe() {
-    eprintln!("PROBE tresca {:?}", block(250.0, false, LinearKind::Iterative).0);
-    eprintln!("PROBE coulomb {:?}", block(250.0, true, LinearKind::Iterative).0);
 }

@@ -178,11 +178,10 @@ impl<'p> ContactLaws<'p> {
             .collect()
     }
 
-    /// The smallest bound at rest, min_i b_i(0) (the scale of the law's residuals).
+    /// The smallest positive bound at rest, min_i b_i(0) > 0 (the scale of the law's
+    /// residuals, [`law_scale`]).
     pub fn smallest_bound_at_rest(&self) -> f64 {
-        (0..self.len())
-            .map(|i| self.bound(i, 0.0))
-            .fold(f64::INFINITY, f64::min)
+        law_scale((0..self.len()).map(|i| self.bound(i, 0.0)))
     }
 
     /// The largest bound at rest, max_i b_i(0).
@@ -388,4 +387,19 @@ pub fn foundation_tangential(problem: &Problem, t: f64) -> Result<Option<Vec<f64
         }
     }
     Ok(Some(v_tau))
+}
+
+/// The scale of the nodal law's residuals: the smallest *positive* bound (a node without
+/// friction, e.g. where the contact pressure vanishes under Coulomb friction, would make any
+/// residual infinitely large), or the smallest positive number where no bound is positive
+/// (frictionless contact, whose law residual |ξ| must then vanish).
+pub fn law_scale(bounds: impl IntoIterator<Item = f64>) -> f64 {
+    let smallest = (bounds.into_iter())
+        .filter(|&g| g > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if smallest.is_finite() {
+        smallest
+    } else {
+        f64::MIN_POSITIVE
+    }
 }

@@ -23,7 +23,7 @@ mod step_matrix;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
-pub use laws::{foundation_tangential, ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
+pub use laws::{foundation_tangential, law_scale, ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
 pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;

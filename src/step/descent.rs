@@ -55,6 +55,7 @@ use super::condensed::Condensation;
 use super::newton::{CondensedStep, NewtonParams, NewtonResult};
 use crate::la::vector::norm2 as norm;
 use crate::la::{FactorStage, LaError as Error};
+use crate::model::law_scale;
 
 /// Settings of the descent.
 #[derive(Debug, Clone, Copy)]
@@ -214,12 +215,9 @@ pub fn descend(
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
     let g_min = |w: &[f64]| {
         match frozen {
-            Some(g) => g.iter().fold(f64::INFINITY, |m, v| m.min(*v)),
-            None => (0..n_nodes)
-                .map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))
-                .fold(f64::INFINITY, f64::min),
+            Some(g) => law_scale(g.iter().copied()),
+            None => law_scale((0..n_nodes).map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))),
         }
-        .max(f64::MIN_POSITIVE)
     };
     let mut w0 = vec![0.0; n_t];
     let mut y = vec![0.0; n_t];

@@ -313,7 +313,7 @@ impl ConvexSubproblem for CondensedConvex<'_, '_> {
         let t = step.tangential;
         let tolerance = solver.paper_params.tolerance;
         let bounds = step.laws.bounds(&iterate.w);
-        let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+        let g_min = crate::model::law_scale(bounds.iter().copied());
         self.g_min = g_min;
         let Some(inner) = solver
             .convex_subproblem(

@@ -353,7 +353,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         }
         let (w, xi) = (&iterate.w, &iterate.xi);
         let bounds = laws.bounds(w);
-        let g_min = bounds.iter().fold(f64::INFINITY, |s, v| s.min(*v));
+        let g_min = crate::model::law_scale(bounds.iter().copied());
         let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
         let law = solver.law_residual(w, xi, &bounds);
         Ok(vec![
