@@ -25,10 +25,16 @@ fn run_observing(problem: &Problem, linear: LinearKind, middle: usize) -> (Vec<(
         ..OutputPlan::default()
     };
     let mut slips = Vec::new();
-    let run = driver::run_observed(problem, &params(linear), &plan, &Default::default(), |problem, state, _| {
-        let count = contact_rows(problem, state, 1e-6).iter().filter(|r| r.slip).count();
-        slips.push((state.t, count, state.pressure.get(middle).copied().unwrap_or(f64::NAN)));
-    })
+    let run = driver::run_observed(
+        problem,
+        &params(linear),
+        &plan,
+        &Default::default(),
+        |problem, state, _| {
+            let count = contact_rows(problem, state, 1e-6).iter().filter(|r| r.slip).count();
+            slips.push((state.t, count, state.pressure.get(middle).copied().unwrap_or(f64::NAN)));
+        },
+    )
     .unwrap();
     (slips, run.state)
 }
@@ -71,7 +77,8 @@ fn a_body_moving_with_the_foundation_is_the_body_at_rest_translated() {
         let shifted_w: Vec<f64> = (moving.w.iter().enumerate())
             .map(|(j, w)| w - if j % 2 == 0 { 1.5 } else { 0.0 })
             .collect();
-        let difference = |a: &[f64], b: &[f64]| largest(a.iter().zip(b).map(|(x, y)| x - y)) / largest(b.iter().copied());
+        let difference =
+            |a: &[f64], b: &[f64]| largest(a.iter().zip(b).map(|(x, y)| x - y)) / largest(b.iter().copied());
         let tolerance = 1e-7;
         for (name, a, b) in [
             ("u", &shifted_u, &rest.u),
@@ -136,7 +143,10 @@ fn heated_pad(cells: usize, steps: usize) -> f64 {
         .unwrap();
     let (_, state) = run(&problem, LinearKind::Direct);
     let rows = contact_rows(&problem, &state, 1e-9);
-    assert!(rows.iter().all(|r| r.slip), "the pad slides on the foundation everywhere");
+    assert!(
+        rows.iter().all(|r| r.slip),
+        "the pad slides on the foundation everywhere"
+    );
     let q = s * v;
     let exact = 2.0 * q * t_end.sqrt() / std::f64::consts::PI.sqrt();
     let face = rows.iter().map(|r| r.theta).sum::<f64>() / rows.len() as f64;
@@ -150,7 +160,10 @@ fn a_pad_on_a_sliding_foundation_heats_as_a_half_space_under_the_friction_power(
     let coarse = heated_pad(100, 32);
     let fine = heated_pad(200, 128);
     assert!(coarse < 1e-2, "error {coarse:e}");
-    assert!(fine < 0.35 * coarse, "the error falls under refinement: {coarse:e} → {fine:e}");
+    assert!(
+        fine < 0.35 * coarse,
+        "the error falls under refinement: {coarse:e} → {fine:e}"
+    );
 }
 
 /// A block 4 × 1, free (no clamp), Poisson's ratio 0 (so that its contact pressure is the load
@@ -205,13 +218,64 @@ fn coulomb_onset_doubles_with_the_pressure_and_the_contact_pressure_is_the_load(
         let (onset_1, pressure_1) = block(250.0, true, linear);
         let (onset_2, pressure_2) = block(500.0, true, linear);
         // μ p / c = 1 s and 2 s.
-        assert!((onset_1 - 1.0).abs() <= 0.2, "{linear:?}: onset at {onset_1} s (expected ≈ 1 s)");
-        assert!((onset_2 / onset_1 - 2.0).abs() <= 0.2, "{linear:?}: onsets {onset_1} s, {onset_2} s");
+        assert!(
+            (onset_1 - 1.0).abs() <= 0.2,
+            "{linear:?}: onset at {onset_1} s (expected ≈ 1 s)"
+        );
+        assert!(
+            (onset_2 / onset_1 - 2.0).abs() <= 0.2,
+            "{linear:?}: onsets {onset_1} s, {onset_2} s"
+        );
         assert!((pressure_1 / 250.0 - 1.0).abs() < 2e-3, "{linear:?}: p = {pressure_1}");
         assert!((pressure_2 / 500.0 - 1.0).abs() < 2e-3, "{linear:?}: p = {pressure_2}");
         let (tresca_1, _) = block(250.0, false, linear);
         let (tresca_2, _) = block(500.0, false, linear);
-        assert!((tresca_1 - 1.0).abs() <= 0.2, "{linear:?}: Tresca onset at {tresca_1} s (expected ≈ 1 s)");
-        assert_eq!(tresca_1, tresca_2, "{linear:?}: a prescribed bound ignores the pressure");
+        assert!(
+            (tresca_1 - 1.0).abs() <= 0.2,
+            "{linear:?}: Tresca onset at {tresca_1} s (expected ≈ 1 s)"
+        );
+        assert_eq!(
+            tresca_1, tresca_2,
+            "{linear:?}: a prescribed bound ignores the pressure"
+        );
     }
+}
+
+/// The scenario keys: `[foundation]` and `friction.normal`, with errors that name the key.
+#[test]
+fn the_scenario_keys_build_the_foundation_and_coulomb_and_name_their_errors() {
+    use thermocontact::Scenario;
+    let load = |sets: &[&str]| Scenario::load(None, &sets.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+    let ok = load(&[
+        "friction={law=\"coulomb\", coefficient=0.3}",
+        "foundation={center=[20.0, 50.0], angular_velocity=0.01}",
+        "time.steps=4",
+        "mesh.nx=8",
+        "mesh.ny=2",
+    ])
+    .unwrap();
+    let problem = ok.build().unwrap();
+    assert!(problem.pressure.is_some() && problem.foundation.is_some());
+    // The bottom (y = 0) moves along +x at ω · 50 = 0.5 m/s under a disc centred above it.
+    let v = problem.foundation.as_ref().unwrap().velocity(2, [20.0, 0.0, 0.0], 0.0);
+    assert!((v[0] - 0.5).abs() < 1e-12 && v[1].abs() < 1e-12, "{v:?}");
+    let (_, state) = driver::run_quiet(&problem, &ok.solver_params(), &OutputPlan::default()).unwrap();
+    assert!(state.pressure.iter().all(|p| p.is_finite() && *p >= 0.0));
+
+    let message = |sets: &[&str]| {
+        let error = load(sets).and_then(|s| s.build().map(|_| ())).unwrap_err();
+        error.to_string()
+    };
+    let m = message(&["friction={law=\"coulomb\", coefficient=0.3, bound=100.0}"]);
+    assert!(m.contains("friction.bound") && m.contains("reaction"), "{m}");
+    let m = message(&["friction={law=\"tresca\", normal=\"prescribed\"}"]);
+    assert!(m.contains("friction.bound") && m.contains("missing"), "{m}");
+    let m = message(&["foundation={velocity=[1.0, 0.0], angular_velocity=2.0}"]);
+    assert!(m.contains("foundation") && m.contains("either `velocity`"), "{m}");
+    let m = message(&["foundation={axis_point=[0.0, 0.0, 0.0], axis=[0.0, 0.0, 1.0], angular_velocity=1.0}"]);
+    assert!(m.contains("foundation") && m.contains("center"), "{m}");
+    let m = message(&["foundation={velocity=[1.0, 0.0, 0.0]}"]);
+    assert!(m.contains("foundation.velocity") && m.contains("2 components"), "{m}");
+    let m = message(&["friction={law=\"coulomb\", coefficient=-0.3}"]);
+    assert!(m.contains("friction.coefficient"), "{m}");
 }

@@ -12,12 +12,12 @@ pub mod friction;
 pub mod heat;
 pub mod table;
 
+pub use foundation::{Foundation, NormalForce};
 #[allow(deprecated)]
 pub use friction::SlipWeakening;
-pub use foundation::{Foundation, NormalForce};
 pub use friction::{
-    project_to_ball, Coulomb, ExpressionFriction, FrictionLaw, LawPoint, SlipDistanceWeakening, TabulatedFriction, Tresca,
-    VelocityWeakening,
+    project_to_ball, Coulomb, ExpressionFriction, FrictionLaw, LawPoint, SlipDistanceWeakening, TabulatedFriction,
+    Tresca, VelocityWeakening,
 };
 pub use heat::{
     ExpressionExchange, ExpressionHeating, FrictionalHeating, HeatExchange, LinearHeating, QuadraticExchange,

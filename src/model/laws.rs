@@ -394,9 +394,7 @@ pub fn foundation_tangential(problem: &Problem, t: f64) -> Result<Option<Vec<f64
 /// residual infinitely large), or the smallest positive number where no bound is positive
 /// (frictionless contact, whose law residual |ξ| must then vanish).
 pub fn law_scale(bounds: impl IntoIterator<Item = f64>) -> f64 {
-    let smallest = (bounds.into_iter())
-        .filter(|&g| g > 0.0)
-        .fold(f64::INFINITY, f64::min);
+    let smallest = (bounds.into_iter()).filter(|&g| g > 0.0).fold(f64::INFINITY, f64::min);
     if smallest.is_finite() {
         smallest
     } else {

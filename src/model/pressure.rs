@@ -102,7 +102,10 @@ impl ContactPressure {
             .map(|(i, node)| {
                 let entries = self.velocity_ptr[i]..self.velocity_ptr[i + 1];
                 let mut lambda = 0.0;
-                for (&j, v) in self.velocity_cols[entries.clone()].iter().zip(&self.velocity_values[entries]) {
+                for (&j, v) in self.velocity_cols[entries.clone()]
+                    .iter()
+                    .zip(&self.velocity_values[entries])
+                {
                     lambda += v[0] * (state.w[j] - previous.w[j]) / k + v[1] * state.w[j] + v[2] * state.u[j];
                 }
                 let entries = self.theta_ptr[i]..self.theta_ptr[i + 1];

@@ -9,10 +9,9 @@ use toml::{Table, Value};
 use super::validate::{invalid, MAX_MAGNITUDE};
 use super::{Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, Traction};
 use crate::contact::{
-    Coulomb, Foundation,
-    ExpressionExchange, ExpressionFriction, ExpressionHeating, FrictionLaw, FrictionalHeating, HeatExchange,
-    LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction, Tresca,
-    VelocityWeakening,
+    Coulomb, ExpressionExchange, ExpressionFriction, ExpressionHeating, Foundation, FrictionLaw, FrictionalHeating,
+    HeatExchange, LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction,
+    Tresca, VelocityWeakening,
 };
 use crate::driver::{OutputPlan, Summary};
 use crate::error::Error;

@@ -363,6 +363,8 @@ const OPTIONAL_KEYS: &[&str] = &[
     "loads.pressure",
     "initial.from",
     "friction.part",
+    "friction.normal",
+    "foundation",
     "frictional_heating.value",
 ];
 

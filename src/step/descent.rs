@@ -213,11 +213,9 @@ pub fn descend(
     let laws = step.laws;
     let mut w = start.w;
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
-    let g_min = |w: &[f64]| {
-        match frozen {
-            Some(g) => law_scale(g.iter().copied()),
-            None => law_scale((0..n_nodes).map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))),
-        }
+    let g_min = |w: &[f64]| match frozen {
+        Some(g) => law_scale(g.iter().copied()),
+        None => law_scale((0..n_nodes).map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))),
     };
     let mut w0 = vec![0.0; n_t];
     let mut y = vec![0.0; n_t];

@@ -116,7 +116,8 @@ impl<'a> StepSolver<'a> {
     /// fixed point on it (docs/laws.md, "Heat exchange").
     pub fn step(&self, previous: &State, t: f64) -> Result<(State, StepInfo), SolveError> {
         let (problem, _) = self.problem_and_tolerance();
-        let mut laws = ContactLaws::new(problem, t, &previous.slip_distance).map_err(|e| SolveError::Other(e.into()))?;
+        let mut laws =
+            ContactLaws::new(problem, t, &previous.slip_distance).map_err(|e| SolveError::Other(e.into()))?;
         if laws.uses_pressure() {
             self.pressure_iteration(previous, laws)
         } else {
@@ -148,7 +149,10 @@ impl<'a> StepSolver<'a> {
     /// fails on the pressure's increment, and the time loop cuts it back.
     fn pressure_iteration(&self, previous: &State, mut laws: ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let (problem, tolerance) = self.problem_and_tolerance();
-        let rows = problem.pressure.as_ref().expect("a law that scales with the pressure has its rows");
+        let rows = problem
+            .pressure
+            .as_ref()
+            .expect("a law that scales with the pressure has its rows");
         let force = problem.force(laws.t).map_err(|e| SolveError::Other(e.into()))?;
         let n_contact = problem.contact.len();
         let mut pressure = if previous.pressure.len() == n_contact {
