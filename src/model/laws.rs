@@ -31,6 +31,10 @@ pub struct Heating {
     pub law: Box<dyn FrictionalHeating>,
     /// The fraction of the frictional power h_τ that enters the body.
     pub share: f64,
+    /// h_τ is the friction's own dissipated power, h_τ(r) = b_i(r) r = |ξ_i| |w_τ − v_F,τ| at
+    /// a slipping node (`law` unused): the heat a brake makes, consistent with the friction
+    /// law at every node (Coulomb's included).
+    pub friction_power: bool,
 }
 
 /// The laws of one time step at the contact nodes: x_i, t_n and the slip distances s_i fixed,
@@ -216,6 +220,9 @@ impl<'p> ContactLaws<'p> {
     #[inline]
     pub fn heat(&self, i: usize, r: f64) -> f64 {
         let heating = &self.problem.heating;
+        if heating.friction_power {
+            return heating.share * self.bound(i, r) * r;
+        }
         // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
         heating.share * heating.law.heat(&self.points[i], r)
     }
@@ -224,6 +231,9 @@ impl<'p> ContactLaws<'p> {
     #[inline]
     pub fn heat_change(&self, i: usize, from: f64, to: f64) -> f64 {
         let heating = &self.problem.heating;
+        if heating.friction_power {
+            return self.heat(i, to) - self.heat(i, from);
+        }
         // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
         heating.share * heating.law.heat_change(&self.points[i], from, to)
     }
@@ -232,6 +242,9 @@ impl<'p> ContactLaws<'p> {
     #[inline]
     pub fn heat_derivative(&self, i: usize, r: f64) -> f64 {
         let heating = &self.problem.heating;
+        if heating.friction_power {
+            return heating.share * (self.bound_derivative(i, r) * r + self.bound(i, r));
+        }
         // share = 1 (the paper) multiplies exactly: the same bits as h_τ alone.
         heating.share * heating.law.heat_derivative(&self.points[i], r)
     }

@@ -210,6 +210,7 @@ pub struct ProblemBuilder {
     exchange: Box<dyn HeatExchange>,
     heating: Box<dyn FrictionalHeating>,
     heat_share: f64,
+    friction_power: bool,
     loads: Vec<(LoadTarget, Datum, String)>,
     initial: [(Datum, &'static str); 3],
     /// Nodal initial fields that replace the three data above (a checkpoint of another run).
@@ -249,6 +250,7 @@ impl ProblemBuilder {
             }),
             heating: Box::new(LinearHeating::affine(0.0, 0.0)),
             heat_share: 1.0,
+            friction_power: false,
             loads: Vec::new(),
             initial: [
                 (Datum::Constant(vec![0.0; d]), INITIAL_NAMES[0]),
@@ -365,6 +367,13 @@ impl ProblemBuilder {
     /// The fraction of the frictional power that enters the body (default 1, as in the paper).
     pub fn heat_share(mut self, share: f64) -> Self {
         self.heat_share = share;
+        self
+    }
+
+    /// The frictional heating as the friction's dissipated power, h_τ(r) = b_i(r) r at each
+    /// contact node (times the share): the heat a brake makes ([`Heating::friction_power`]).
+    pub fn frictional_heating_from_friction(mut self) -> Self {
+        self.friction_power = true;
         self
     }
 
@@ -584,6 +593,7 @@ impl ProblemBuilder {
             heating: Heating {
                 law: self.heating,
                 share: self.heat_share,
+                friction_power: self.friction_power,
             },
             forces,
             heat_sources,

@@ -458,6 +458,16 @@ impl Scenario {
                 (None, law) => builder.friction_from_pressure(spec.part(), law),
             };
         }
+        if self.frictional_heating.friction_power {
+            if let Some(value) = &self.frictional_heating.value {
+                return Err(invalid(
+                    "frictional_heating.value",
+                    value,
+                    "no value with friction_power = true (the heat is the friction's power b(r) r)",
+                ));
+            }
+            builder = builder.frictional_heating_from_friction();
+        }
         if let Some(foundation) = &self.foundation {
             builder = builder.foundation(foundation.to_foundation(d)?);
         }

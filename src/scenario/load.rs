@@ -366,6 +366,7 @@ const OPTIONAL_KEYS: &[&str] = &[
     "friction.normal",
     "foundation",
     "frictional_heating.value",
+    "frictional_heating.friction_power",
 ];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace

@@ -547,6 +547,9 @@ pub struct FrictionalHeatingSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub value: Option<String>,
     pub share: f64,
+    /// h_τ = b(r) r, the friction's dissipated power (`constant`, `rate` and `value` unused).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub friction_power: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
