@@ -121,7 +121,7 @@ fn a_foundation_at_rest_is_the_paper_bit_for_bit() {
 /// Tresca bound S and the frictional heat h_τ = S |w_τ − v_F| (all of it into the pad): the
 /// face takes the flux q = S V, and while the heat has not reached the top the pad is a
 /// half-space, whose surface temperature is θ₀ + 2 q √t / (√π e), e = √(K ρ c_p).
-fn heated_pad(cells: usize, steps: usize) -> f64 {
+fn heated_pad(cells: usize, steps: usize, friction_power: bool) -> (f64, f64) {
     let (s, v, t_end) = (2.0, 3.0, 0.01);
     let mesh = thermocontact::mesh::rectangle(0.1, 1.0, 1, cells);
     let material = Material {
@@ -133,14 +133,17 @@ fn heated_pad(cells: usize, steps: usize) -> f64 {
         conductivity: 1.0,
         reference_temperature: 0.0,
     };
-    let problem = ProblemBuilder::new(mesh, material, TimeGrid::new(t_end, steps))
+    let mut builder = ProblemBuilder::new(mesh, material, TimeGrid::new(t_end, steps))
         .dirichlet(&["top"])
         .contact(&["bottom"])
         .friction(s, Tresca)
-        .frictional_heating(thermocontact::contact::LinearHeating::affine(s, 0.0))
-        .foundation(Foundation::Velocity(Datum::constant(vec![v, 0.0])))
-        .build()
-        .unwrap();
+        .foundation(Foundation::Velocity(Datum::constant(vec![v, 0.0])));
+    builder = if friction_power {
+        builder.frictional_heating_from_friction()
+    } else {
+        builder.frictional_heating(thermocontact::contact::LinearHeating::affine(s, 0.0))
+    };
+    let problem = builder.build().unwrap();
     let (_, state) = run(&problem, LinearKind::Direct);
     let rows = contact_rows(&problem, &state, 1e-9);
     assert!(
@@ -150,15 +153,18 @@ fn heated_pad(cells: usize, steps: usize) -> f64 {
     let q = s * v;
     let exact = 2.0 * q * t_end.sqrt() / std::f64::consts::PI.sqrt();
     let face = rows.iter().map(|r| r.theta).sum::<f64>() / rows.len() as f64;
-    (face - exact).abs() / exact
+    ((face - exact).abs() / exact, face)
 }
 
 #[test]
 fn a_pad_on_a_sliding_foundation_heats_as_a_half_space_under_the_friction_power() {
     // Measured: 4.1·10⁻³ and 1.0·10⁻³ (backward Euler's O(k) dominates; 2.6·10⁻⁴ at 400
     // cells and 512 steps).
-    let coarse = heated_pad(100, 32);
-    let fine = heated_pad(200, 128);
+    let (coarse, face) = heated_pad(100, 32, false);
+    let (fine, _) = heated_pad(200, 128, false);
+    // The friction's own power |ξ| r is S r here: the same heat.
+    let (_, power_face) = heated_pad(100, 32, true);
+    assert!((power_face - face).abs() <= 1e-9 * face, "{power_face} against {face}");
     assert!(coarse < 1e-2, "error {coarse:e}");
     assert!(
         fine < 0.35 * coarse,
