@@ -362,6 +362,7 @@ const OPTIONAL_KEYS: &[&str] = &[
     "initial.from",
     "friction.part",
     "frictional_heating.value",
+    "thermal",
 ];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
