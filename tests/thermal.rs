@@ -41,6 +41,23 @@ fn slab(final_time: f64, steps: usize) -> ProblemBuilder {
     ProblemBuilder::new(mesh, thermal_material(), TimeGrid::new(final_time, steps)).dirichlet(&["left"])
 }
 
+/// The slab in 2D (parts left, right, …) or 3D ([0, L] × [0, L/4]², parts x-, x+, …), clamped on
+/// its x = 0 face; with the names of its x = 0 and x = L faces and of a side.
+fn slab_in(dim: usize, final_time: f64, steps: usize) -> (ProblemBuilder, [&'static str; 3]) {
+    let (mesh, faces) = match dim {
+        2 => (mesh::rectangle(LENGTH, LENGTH / 4.0, 8, 2), ["left", "right", "top"]),
+        _ => (
+            mesh::cuboid([LENGTH, LENGTH / 4.0, LENGTH / 4.0], [6, 2, 2]),
+            ["x-", "x+", "z+"],
+        ),
+    };
+    let time = TimeGrid::new(final_time, steps);
+    (
+        ProblemBuilder::new(mesh, thermal_material(), time).dirichlet(&faces[..1]),
+        faces,
+    )
+}
+
 fn run(problem: &Problem) -> State {
     run_with(problem, LinearKind::Auto)
 }
@@ -62,16 +79,24 @@ fn max_error(problem: &Problem, theta: &[f64], exact: impl Fn([f64; 3]) -> f64) 
         .fold(0.0, f64::max)
 }
 
-/// A flux q into the right face, θ = θ_D on the left, top and bottom insulated: at steady state
-/// θ(x) = θ_D + q x / K, so the flux face sits at θ_D + qL/K.
+/// A flux q into the x = L face, θ = θ_D on x = 0, the other faces insulated (one of them
+/// explicitly, the others as parts in no role): at steady state θ(x) = θ_D + q x / K, so the
+/// flux face sits at θ_D + qL/K. In 2D and 3D.
 #[test]
 fn prescribed_flux_through_a_slab_gives_the_linear_profile() {
+    for dim in [2, 3] {
+        prescribed_flux_in(dim);
+    }
+}
+
+fn prescribed_flux_in(dim: usize) {
     let (theta_d, q) = (10.0, 3.0);
-    let problem = slab(1e4, 4)
-        .boundary_temperature(-50.0) // replaced on the left by its temperature condition
-        .thermal("left", ThermalCondition::Temperature(Datum::scalar(theta_d)))
-        .thermal("right", ThermalCondition::Flux(Datum::scalar(q)))
-        .thermal("top", ThermalCondition::Insulated)
+    let (builder, [near, far, side]) = slab_in(dim, 1e4, 4);
+    let problem = builder
+        .boundary_temperature(-50.0) // replaced on x = 0 by its temperature condition
+        .thermal(near, ThermalCondition::Temperature(Datum::scalar(theta_d)))
+        .thermal(far, ThermalCondition::Flux(Datum::scalar(q)))
+        .thermal(side, ThermalCondition::Insulated)
         .build()
         .unwrap();
     let state = run(&problem);
@@ -84,7 +109,7 @@ fn prescribed_flux_through_a_slab_gives_the_linear_profile() {
         .fold(f64::NAN, f64::max);
     assert!(
         error < 1e-9 * face,
-        "max error {error:e} (flux face {right}, closed form {face})"
+        "{dim}D: max error {error:e} (flux face {right}, closed form {face})"
     );
     assert!((right - face).abs() < 1e-9 * face, "{right} vs {face}");
 }
@@ -160,7 +185,10 @@ fn a_flux_that_moves_in_time_enters_at_every_step() {
     let (final_time, steps) = (0.4, 4);
     let problem = slab(final_time, steps)
         .thermal("left", ThermalCondition::Insulated)
-        .thermal("right", ThermalCondition::Flux(Datum::expression("2*t*(1 + y)").unwrap()))
+        .thermal(
+            "right",
+            ThermalCondition::Flux(Datum::expression("2*t*(1 + y)").unwrap()),
+        )
         .build()
         .unwrap();
     let energy = |theta: &[f64]| {
@@ -171,7 +199,9 @@ fn a_flux_that_moves_in_time_enters_at_every_step() {
     let state = run(&problem);
     let gained = energy(&state.theta) - energy(&problem.initial.temperature);
     let (k, height) = (final_time / steps as f64, LENGTH / 4.0);
-    let expected: f64 = (1..=steps).map(|n| k * 2.0 * (n as f64 * k) * (height + height * height / 2.0)).sum();
+    let expected: f64 = (1..=steps)
+        .map(|n| k * 2.0 * (n as f64 * k) * (height + height * height / 2.0))
+        .sum();
     assert!(
         (gained - expected).abs() < 1e-10 * expected,
         "gained {gained}, the flux gave {expected}"

@@ -88,7 +88,8 @@ pub struct ContactNode {
     /// The velocity unknown of each tangent coordinate (d − 1 entries); `None` where the
     /// coordinate is held at zero (a corner of Γ_C or a symmetry plane through the node).
     pub tangent_dofs: Vec<Option<usize>>,
-    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
+    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N, or of a
+    /// part with a temperature condition).
     pub theta_dof: Option<usize>,
 }
 
@@ -623,7 +624,8 @@ impl Problem {
         Ok(force)
     }
 
-    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs; for a nonlinear heat exchange,
+    /// ∫ g(t) η + k_e θ_R ∫_ΓC η + the thermal conditions' boundary loads (∫ q(t) η of a flux,
+    /// h θ_∞ ∫ η of convection) on full temperature dofs; for a nonlinear heat exchange,
     /// −ℓ_p ∂j(θ_p) at the nodes of Γ_C evaluated at the temperatures `exchange_at` instead
     /// (nodal quadrature, the friction's).
     pub fn heat_load(&self, t: f64, exchange_at: &[f64]) -> Result<Vec<f64>, Error> {

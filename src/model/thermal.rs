@@ -179,6 +179,12 @@ fn checked_conditions(
         if parts.contact.contains(&part) {
             return Err(Error::ThermalOnContact { part: name });
         }
+        if mesh.facets_of(&[part]).next().is_none() {
+            return Err(Error::EmptyPart {
+                role: "thermal",
+                part: name,
+            });
+        }
         let datum = match &condition {
             ThermalCondition::Temperature(d) | ThermalCondition::Flux(d) => Some(d),
             _ => None,

@@ -489,6 +489,14 @@ impl Scenario {
             ModelError::CurvedSymmetryPart { part } => {
                 invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)")
             }
+            ModelError::ThermalNotFinite { part, x, t, value } => {
+                let i = self.thermal.iter().position(|c| c.part == part).unwrap_or(0);
+                invalid(
+                    &format!("thermal[{i}].value"),
+                    &value,
+                    &format!("a finite temperature on `{part}` (not at x = {x:?}, t = {t})"),
+                )
+            }
             other => other.into(),
         })
     }
