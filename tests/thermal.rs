@@ -371,6 +371,17 @@ fn scenario_errors_name_the_key_the_value_and_what_was_expected() {
     assert!(e.contains("thermal[0].value"), "{e}");
 }
 
+/// Data that are not finite where they are used stop the build naming their key.
+#[test]
+fn data_that_are_not_finite_name_their_key() {
+    for condition in ["temperature", "flux"] {
+        let text = format!("[[thermal]]\npart = \"right\"\ncondition = \"{condition}\"\nvalue = \"1/(x - 40)\"");
+        let scenario = Scenario::load(Some(&text), &["mesh.nx=4".into(), "mesh.ny=2".into()]).unwrap();
+        let e = scenario.build().unwrap_err().to_string();
+        assert!(e.contains("thermal[0].value") && e.contains("inf"), "{condition}: {e}");
+    }
+}
+
 /// The builder refuses what the scenario layer checks first: a contact part, a part twice.
 #[test]
 fn builder_refuses_a_contact_part_and_a_part_twice() {

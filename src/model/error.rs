@@ -91,9 +91,9 @@ pub enum ModelError {
         ambient: f64,
     },
     /// A prescribed temperature that is not finite at a node.
-    #[error("the temperature prescribed on `{part}` is {value} at x = {x:?}, t = {t} (expected a finite value)")]
+    #[error("`{label}` is {value} at x = {x:?}, t = {t} (expected a finite temperature)")]
     ThermalNotFinite {
-        part: String,
+        label: String,
         x: [f64; 3],
         t: f64,
         value: f64,

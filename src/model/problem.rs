@@ -204,8 +204,8 @@ pub struct ProblemBuilder {
     contact: Vec<String>,
     symmetry: Vec<String>,
     boundary_temperature: f64,
-    /// Thermal conditions per part, in the order given.
-    thermal: Vec<(String, ThermalCondition)>,
+    /// Thermal conditions per part (part, condition, label), in the order given.
+    thermal: Vec<(String, ThermalCondition, String)>,
     /// (part name or `None` for all, scale, law).
     friction: Vec<(Option<String>, Datum, Box<dyn FrictionLaw>)>,
     exchange: Box<dyn HeatExchange>,
@@ -318,8 +318,15 @@ impl ProblemBuilder {
     /// // θ = θ_D on the left only: the top's nodes, off its corner with the left, are unknowns.
     /// assert_eq!(problem.temperature.free.iter().filter(|f| f.is_none()).count(), 3);
     /// ```
-    pub fn thermal(mut self, part: &str, condition: ThermalCondition) -> Self {
-        self.thermal.push((part.to_string(), condition));
+    pub fn thermal(self, part: &str, condition: ThermalCondition) -> Self {
+        let label = format!("the {} on `{part}`", condition.name());
+        self.labelled_thermal(part, condition, label)
+    }
+
+    /// [`ProblemBuilder::thermal`], its datum named `label` in errors (the scenario passes its
+    /// key).
+    pub fn labelled_thermal(mut self, part: &str, condition: ThermalCondition, label: String) -> Self {
+        self.thermal.push((part.to_string(), condition, label));
         self
     }
 

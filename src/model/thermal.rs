@@ -73,8 +73,8 @@ pub struct ThermalBoundary {
     /// Dirichlet nodes whose θ_D depends on t, each with its datum (an index into
     /// `moving_data`).
     moving: Vec<(usize, usize)>,
-    /// The data of the temperature parts that depend on t, each with its part.
-    moving_data: Vec<(usize, Datum)>,
+    /// The data of the temperature parts that depend on t, each with its label.
+    moving_data: Vec<(String, Datum)>,
     /// Whether each node is in `moving` (empty when none is).
     is_moving: Vec<bool>,
     /// Boundary heat loads that depend on t (fluxes); the constant ones are added once into the
@@ -97,12 +97,14 @@ pub(super) struct ThermalSetup {
 /// Resolves the conditions given per part (names as in the mesh) against the mechanical roles:
 /// the Dirichlet nodes, their values, the boundary loads. With no conditions this is the
 /// paper's rule, computed as it always was.
+/// Each condition comes with the label that names its datum in errors.
 pub(super) fn resolve(
     mesh: &Mesh,
     parts: &BoundaryParts,
-    given: Vec<(String, ThermalCondition)>,
+    given: Vec<(String, ThermalCondition, String)>,
     boundary_temperature: f64,
 ) -> Result<ThermalSetup, Error> {
+    let labels: Vec<String> = given.iter().map(|(_, _, label)| label.clone()).collect();
     let conditions = checked_conditions(mesh, parts, given)?;
     let listed: Vec<usize> = conditions.iter().map(|(p, _)| *p).collect();
     let mut fixed_parts: Vec<usize> = [parts.dirichlet.clone(), parts.neumann.clone()]
@@ -124,9 +126,14 @@ pub(super) fn resolve(
 
     let mut boundary = ThermalBoundary::default();
     let mut source = vec![false; mesh.n_nodes()];
-    for (part, condition) in &conditions {
+    for ((part, condition), label) in conditions.iter().zip(&labels) {
         if let ThermalCondition::Temperature(datum) = condition {
-            prescribe(mesh, *part, datum, &mut source, &mut values, &mut boundary)?;
+            let prescribed = Prescribed {
+                part: *part,
+                datum,
+                label,
+            };
+            prescribed.apply(mesh, &mut source, &mut values, &mut boundary)?;
         }
     }
     if !boundary.moving.is_empty() {
@@ -135,8 +142,7 @@ pub(super) fn resolve(
     }
 
     let mut constant_load: Option<Vec<f64>> = None;
-    for (part, condition) in &conditions {
-        let label = format!("the {} on `{}`", condition.name(), mesh.part_names[*part]);
+    for ((part, condition), label) in conditions.iter().zip(labels) {
         let datum = match condition {
             ThermalCondition::Flux(q) => q.clone(),
             ThermalCondition::Convection { coefficient, ambient } => Datum::scalar(coefficient * ambient),
@@ -164,10 +170,10 @@ pub(super) fn resolve(
 fn checked_conditions(
     mesh: &Mesh,
     parts: &BoundaryParts,
-    given: Vec<(String, ThermalCondition)>,
+    given: Vec<(String, ThermalCondition, String)>,
 ) -> Result<Vec<(usize, ThermalCondition)>, Error> {
     let mut conditions: Vec<(usize, ThermalCondition)> = Vec::with_capacity(given.len());
-    for (name, condition) in given {
+    for (name, condition, _) in given {
         let part = mesh.part_index(&name).ok_or_else(|| Error::UnknownPart {
             role: "a thermal condition".to_string(),
             name: name.clone(),
@@ -217,43 +223,51 @@ fn checked_conditions(
     Ok(conditions)
 }
 
-/// θ_D of the temperature part `part` at its nodes not taken by an earlier one (`taken`), at
-/// t = 0; the nodes of a datum that depends on t are recorded for the steps.
-fn prescribe(
-    mesh: &Mesh,
+/// A temperature condition: its part, θ_D and the label naming it.
+struct Prescribed<'a> {
     part: usize,
-    datum: &Datum,
-    taken: &mut [bool],
-    values: &mut [f64],
-    boundary: &mut ThermalBoundary,
-) -> Result<(), Error> {
-    let moving = datum.uses_time();
-    if moving {
-        boundary.moving_data.push((part, datum.clone()));
-    }
-    let mut value = [0.0];
-    for (p, on) in mesh.nodes_on(&[part]).into_iter().enumerate() {
-        if !on || taken[p] {
-            continue;
-        }
-        taken[p] = true;
-        datum.eval(mesh.coords[p], 0.0, &mut value);
-        finite_temperature(mesh, part, p, 0.0, value[0])?;
-        values[p] = value[0];
-        if moving {
-            boundary.moving.push((p, boundary.moving_data.len() - 1));
-        }
-    }
-    Ok(())
+    datum: &'a Datum,
+    label: &'a str,
 }
 
-fn finite_temperature(mesh: &Mesh, part: usize, node: usize, t: f64, value: f64) -> Result<(), Error> {
+impl Prescribed<'_> {
+    /// θ_D at the part's nodes not taken by an earlier temperature part (`taken`), at t = 0;
+    /// the nodes of a datum that depends on t are recorded for the steps.
+    fn apply(
+        &self,
+        mesh: &Mesh,
+        taken: &mut [bool],
+        values: &mut [f64],
+        boundary: &mut ThermalBoundary,
+    ) -> Result<(), Error> {
+        let moving = self.datum.uses_time();
+        if moving {
+            boundary.moving_data.push((self.label.to_string(), self.datum.clone()));
+        }
+        let mut value = [0.0];
+        for (p, on) in mesh.nodes_on(&[self.part]).into_iter().enumerate() {
+            if !on || taken[p] {
+                continue;
+            }
+            taken[p] = true;
+            self.datum.eval(mesh.coords[p], 0.0, &mut value);
+            finite_temperature(self.label, mesh.coords[p], 0.0, value[0])?;
+            values[p] = value[0];
+            if moving {
+                boundary.moving.push((p, boundary.moving_data.len() - 1));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn finite_temperature(label: &str, x: [f64; 3], t: f64, value: f64) -> Result<(), Error> {
     if value.is_finite() {
         Ok(())
     } else {
         Err(Error::ThermalNotFinite {
-            part: mesh.part_names[part].clone(),
-            x: mesh.coords[node],
+            label: label.to_string(),
+            x,
             t,
             value,
         })
@@ -275,9 +289,9 @@ impl ThermalBoundary {
     pub fn update_temperatures(&self, mesh: &Mesh, t: f64, values: &mut [f64]) -> Result<(), Error> {
         let mut value = [0.0];
         for &(p, k) in &self.moving {
-            let (part, datum) = &self.moving_data[k];
+            let (label, datum) = &self.moving_data[k];
             datum.eval(mesh.coords[p], t, &mut value);
-            finite_temperature(mesh, *part, p, t, value[0])?;
+            finite_temperature(label, mesh.coords[p], t, value[0])?;
             values[p] = value[0];
         }
         Ok(())

@@ -478,7 +478,9 @@ impl Scenario {
             builder = builder.labelled_load(LoadTarget::Pressure(p.part.clone()), datum, key);
         }
         for (i, spec) in self.thermal.iter().enumerate() {
-            builder = builder.thermal(&spec.part, thermal_condition(&format!("thermal[{i}]"), spec)?);
+            let key = format!("thermal[{i}]");
+            let condition = thermal_condition(&key, spec)?;
+            builder = builder.labelled_thermal(&spec.part, condition, format!("{key}.value"));
         }
         Ok(builder)
     }
@@ -488,14 +490,6 @@ impl Scenario {
         self.builder()?.build().map_err(|e| match e {
             ModelError::CurvedSymmetryPart { part } => {
                 invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)")
-            }
-            ModelError::ThermalNotFinite { part, x, t, value } => {
-                let i = self.thermal.iter().position(|c| c.part == part).unwrap_or(0);
-                invalid(
-                    &format!("thermal[{i}].value"),
-                    &value,
-                    &format!("a finite temperature on `{part}` (not at x = {x:?}, t = {t})"),
-                )
             }
             other => other.into(),
         })
