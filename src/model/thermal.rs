@@ -96,8 +96,8 @@ pub(super) struct ThermalSetup {
 
 /// Resolves the conditions given per part (names as in the mesh) against the mechanical roles:
 /// the Dirichlet nodes, their values, the boundary loads. With no conditions this is the
-/// paper's rule, computed as it always was.
-/// Each condition comes with the label that names its datum in errors.
+/// paper's rule, computed as it always was. Each condition comes with the label that names its
+/// datum in errors.
 pub(super) fn resolve(
     mesh: &Mesh,
     parts: &BoundaryParts,
@@ -125,7 +125,7 @@ pub(super) fn resolve(
         .collect();
 
     let mut boundary = ThermalBoundary::default();
-    let mut source = vec![false; mesh.n_nodes()];
+    let mut taken = vec![false; mesh.n_nodes()];
     for ((part, condition), label) in conditions.iter().zip(&labels) {
         if let ThermalCondition::Temperature(datum) = condition {
             let prescribed = Prescribed {
@@ -133,7 +133,7 @@ pub(super) fn resolve(
                 datum,
                 label,
             };
-            prescribed.apply(mesh, &mut source, &mut values, &mut boundary)?;
+            prescribed.apply(mesh, &mut taken, &mut values, &mut boundary)?;
         }
     }
     if !boundary.moving.is_empty() {
