@@ -38,6 +38,7 @@
 //! | ν_i, t_{i,k} | `normal`, `tangents` | a contact node's outward normal and tangent basis ([`contact::frames`]) |
 //! | T, N | `final_time`, `steps` | the time grid ([`model::TimeGrid`]) |
 //! | f₀, f₂, p, g | `BodyForce`, `Traction`, `Pressure`, `HeatSource` | loads ([`model::LoadTarget`], [`loads::Datum`]) |
+//! | θ_D, q, h, θ_∞ | `Temperature`, `Flux`, `Convection { coefficient, ambient }` | thermal conditions per boundary part ([`model::ThermalCondition`]) |
 //! | μ(r) S | `bound` | friction bound at slip rate r |
 //! | ε_conv | `tolerance` | relative tolerance of (77)–(80) |
 //! | k/2^d | `cutback_depth` | substep size of a step cut back d times ([`time::Levels`]) |

@@ -831,6 +831,17 @@ fn print_setup(s: &Scenario) {
         s.boundary.temperature,
         s.material.thermal_expansion,
     );
+    if !s.thermal.is_empty() {
+        let listed: Vec<String> = s
+            .thermal
+            .iter()
+            .map(|t| format!("{} {}", t.part, t.condition))
+            .collect();
+        println!(
+            "thermal conditions: {} (other parts as the paper: θ_D on Γ_D ∪ Γ_N)",
+            listed.join(", ")
+        );
+    }
     for warning in &s.warnings {
         eprintln!("warning: {warning}");
     }

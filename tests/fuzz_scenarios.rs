@@ -18,6 +18,24 @@ use toml::{Table, Value};
 
 const PAPER_3D: &str = include_str!("../scenarios/paper3d.toml");
 
+/// Thermal conditions on the 2D default's parts, one of each kind with data, for the mutations
+/// to reach their keys.
+const THERMAL: &str = r#"
+[[thermal]]
+part = "left"
+condition = "temperature"
+value = { constant = 25.0, rate = 10.0 }
+[[thermal]]
+part = "right"
+condition = "convection"
+coefficient = 25.0
+ambient = 20.0
+[[thermal]]
+part = "top"
+condition = "flux"
+value = "100*t"
+"#;
+
 /// Values a user (or an attacker) might type.
 fn value(rng: &mut Rng) -> Value {
     let floats = [
@@ -187,7 +205,12 @@ fn case(seed: u64) -> Result<Outcome, String> {
             &["mesh.nx=4", "mesh.ny=1", "mesh.nz=1", "time.steps=4"].map(String::from),
         )
     } else {
-        Scenario::load(None, &["mesh.nx=8", "mesh.ny=2", "time.steps=4"].map(String::from))
+        // A third of the 2D cases with thermal conditions.
+        let thermal = rng.below(3) == 0;
+        Scenario::load(
+            thermal.then_some(THERMAL),
+            &["mesh.nx=8", "mesh.ny=2", "time.steps=4"].map(String::from),
+        )
     };
     let base: Table = scenario.unwrap().to_toml().parse().unwrap();
     let mut root = Value::Table(base);

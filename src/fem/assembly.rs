@@ -23,7 +23,8 @@ pub struct Matrices {
     pub coupling: CscMatrix,
     /// ℳ_θ: consistent mass with ρ c_p.
     pub heat_mass: CscMatrix,
-    /// 𝒦_θ: conduction (K∇θ, ∇η) plus the Robin part k_e ∫_ΓC θ η.
+    /// 𝒦_θ: conduction (K∇θ, ∇η) plus the Robin part k_e ∫_ΓC θ η (and h ∫ θ η on convection
+    /// parts, added by the problem's builder: `crate::model::ThermalCondition`).
     pub conduction: CscMatrix,
     /// (ε(u), ε(v)): Gram matrix of the E-norm.
     pub energy_gram: CscMatrix,
@@ -109,16 +110,7 @@ pub fn assemble_matrices(mesh: &Mesh, material: &Material, robin_parts: &[usize]
     });
     let [mass, viscosity, elasticity, coupling, heat_mass, mut conduction, energy_gram, gradient_gram]: [CscMatrix; 8] =
         mats.try_into().expect("eight matrices");
-    for f in mesh.facets_of(robin_parts) {
-        let nodes = mesh.facet(f);
-        let verts: Vec<[f64; 3]> = nodes.iter().map(|&i| mesh.coords[i]).collect();
-        let m = kernels::facet_mass(d, facet_measure(d, &verts));
-        for (a, &p) in nodes.iter().enumerate() {
-            for (b, &q) in nodes.iter().enumerate() {
-                conduction.add(p, q, robin_coefficient * m[a][b]);
-            }
-        }
-    }
+    add_boundary_mass(mesh, robin_parts, robin_coefficient, &mut conduction);
     Matrices {
         mass,
         viscosity,
@@ -128,6 +120,23 @@ pub fn assemble_matrices(mesh: &Mesh, material: &Material, robin_parts: &[usize]
         conduction,
         energy_gram,
         gradient_gram,
+    }
+}
+
+/// Adds `coefficient · ∫_{parts} θ η` (the consistent boundary mass) to a scalar matrix on full
+/// temperature dofs whose pattern holds every facet's node pairs (the cells' graph does): the
+/// Robin term of a heat exchange or a convection condition.
+pub fn add_boundary_mass(mesh: &Mesh, parts: &[usize], coefficient: f64, matrix: &mut CscMatrix) {
+    let d = mesh.dim;
+    for f in mesh.facets_of(parts) {
+        let nodes = mesh.facet(f);
+        let verts: Vec<[f64; 3]> = nodes.iter().map(|&i| mesh.coords[i]).collect();
+        let m = kernels::facet_mass(d, facet_measure(d, &verts));
+        for (a, &p) in nodes.iter().enumerate() {
+            for (b, &q) in nodes.iter().enumerate() {
+                matrix.add(p, q, coefficient * m[a][b]);
+            }
+        }
     }
 }
 

@@ -11,7 +11,8 @@
 //! combination of unknowns: the prolongation P, stored row by row. This is what makes a 3D slab
 //! with w_y = 0 on both y faces a plane-strain model.
 //!
-//! V^h: temperature unknowns at nodes off the closure of Γ_D ∪ Γ_N; the others hold θ_D.
+//! V^h: temperature unknowns at nodes off the closure of Γ_D ∪ Γ_N (the paper's rule; per-part
+//! thermal conditions change which parts hold θ_D: `crate::model::thermal`); the others hold θ_D.
 
 /// The free velocities of one node.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,7 +128,8 @@ impl VelocitySpace {
     }
 }
 
-/// Scalar P1 temperature space with θ = θ_D on the closure of Γ_D ∪ Γ_N.
+/// Scalar P1 temperature space with θ = θ_D at the given Dirichlet nodes (the closure of
+/// Γ_D ∪ Γ_N in the paper).
 #[derive(Debug, Clone)]
 pub struct TemperatureSpace {
     /// Unknown index of each node, `None` at Dirichlet nodes.

@@ -17,6 +17,8 @@ pub enum LoadKind {
     Pressure { parts: Vec<usize> },
     /// A heat source g (1 component) over the cells: ∫_Ω g η.
     HeatSource,
+    /// A heat flux q into the body (1 component) on boundary parts: ∫_Γ q η.
+    HeatFlux { parts: Vec<usize> },
 }
 
 impl LoadKind {
@@ -27,6 +29,7 @@ impl LoadKind {
             LoadKind::Traction { .. } => "traction",
             LoadKind::Pressure { .. } => "pressure",
             LoadKind::HeatSource => "heat source",
+            LoadKind::HeatFlux { .. } => "heat flux",
         }
     }
 
@@ -34,21 +37,21 @@ impl LoadKind {
     pub fn datum_components(&self, dim: usize) -> usize {
         match self {
             LoadKind::BodyForce | LoadKind::Traction { .. } => dim,
-            LoadKind::Pressure { .. } | LoadKind::HeatSource => 1,
+            LoadKind::Pressure { .. } | LoadKind::HeatSource | LoadKind::HeatFlux { .. } => 1,
         }
     }
 
     /// Entries per node of the vector the load adds into: d (velocity) or 1 (temperature).
     pub fn entries_per_node(&self, dim: usize) -> usize {
         match self {
-            LoadKind::HeatSource => 1,
+            LoadKind::HeatSource | LoadKind::HeatFlux { .. } => 1,
             _ => dim,
         }
     }
 
     fn parts(&self) -> Option<&[usize]> {
         match self {
-            LoadKind::Traction { parts } | LoadKind::Pressure { parts } => Some(parts),
+            LoadKind::Traction { parts } | LoadKind::Pressure { parts } | LoadKind::HeatFlux { parts } => Some(parts),
             LoadKind::BodyForce | LoadKind::HeatSource => None,
         }
     }
@@ -237,7 +240,7 @@ impl Load {
                                 out[p * d + c] -= w * f[0] * normal[c];
                             }
                         }
-                        LoadKind::HeatSource => out[p] += w * f[0],
+                        LoadKind::HeatSource | LoadKind::HeatFlux { .. } => out[p] += w * f[0],
                     }
                 }
             }

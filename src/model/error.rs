@@ -70,6 +70,40 @@ pub enum ModelError {
         "the friction bound S is {value} at x = {x:?}, t = {t} (expected a finite, non-negative value: friction.bound)"
     )]
     BadFrictionScale { value: f64, x: [f64; 3], t: f64 },
+    /// A thermal condition given twice for one part.
+    #[error("the part `{part}` is given two thermal conditions: give each part at most one")]
+    ThermalPartTwice { part: String },
+    /// A thermal condition on a contact part.
+    #[error(
+        "the part `{part}` is a contact part: Γ_C has its own heat exchange law (heat_exchange), so it takes no \
+         thermal condition"
+    )]
+    ThermalOnContact { part: String },
+    /// A prescribed temperature or heat flux that is not a scalar datum.
+    #[error("the {condition} on `{part}` must be a scalar datum, but it has {found} components")]
+    ThermalDatum {
+        part: String,
+        condition: &'static str,
+        found: usize,
+    },
+    /// A convection coefficient that is negative or not finite, or an ambient temperature that
+    /// is not finite.
+    #[error(
+        "the convection on `{part}` has h = {coefficient}, θ_∞ = {ambient} (expected a finite h ≥ 0 and a finite θ_∞)"
+    )]
+    BadConvection {
+        part: String,
+        coefficient: f64,
+        ambient: f64,
+    },
+    /// A prescribed temperature that is not finite at a node.
+    #[error("`{label}` is {value} at x = {x:?}, t = {t} (expected a finite temperature)")]
+    ThermalNotFinite {
+        label: String,
+        x: [f64; 3],
+        t: f64,
+        value: f64,
+    },
     /// A mesh that is not valid.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),

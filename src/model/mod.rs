@@ -9,6 +9,7 @@
 //! - [`norms`]: the norms of the stop criteria (77)–(80);
 //! - [`ContactLaws`]: the laws on Γ_C node by node at one step ([`Friction`], [`Heating`]);
 //! - [`ContactRow`]: the state at a node of Γ_C, as output reads it;
+//! - [`thermal`]: thermal boundary conditions per part ([`ThermalCondition`]);
 //! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
 
 mod contact_rows;
@@ -20,6 +21,7 @@ mod problem;
 pub mod samples;
 mod state;
 mod step_matrix;
+pub mod thermal;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use error::ModelError;
@@ -30,3 +32,4 @@ pub use state::State;
 pub use step_matrix::{
     assemble_by_columns, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
 };
+pub use thermal::{ThermalBoundary, ThermalCondition};

@@ -37,6 +37,7 @@
 use super::error::ModelError as Error;
 use super::laws::{Friction, Heating};
 use super::pressure::ContactPressure;
+use super::thermal::{self, ThermalBoundary, ThermalCondition};
 use crate::contact::frames::{contact_frames, orthogonal_complement};
 use crate::contact::{
     Foundation, FrictionLaw, FrictionalHeating, HeatExchange, LawPoint, LinearHeating, NormalForce, QuadraticExchange,
@@ -89,7 +90,8 @@ pub struct ContactNode {
     /// The velocity unknown of each tangent coordinate (d − 1 entries); `None` where the
     /// coordinate is held at zero (a corner of Γ_C or a symmetry plane through the node).
     pub tangent_dofs: Vec<Option<usize>>,
-    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N).
+    /// Temperature unknown, `None` where θ = θ_D (a node also on the closure of Γ_N, or of a
+    /// part with a temperature condition).
     pub theta_dof: Option<usize>,
 }
 
@@ -158,18 +160,22 @@ pub struct Problem {
     pub pressure: Option<ContactPressure>,
     /// The heat exchange ∂j.
     pub exchange: Box<dyn HeatExchange>,
+    /// The thermal conditions given per part ([`ThermalCondition`]), and what changes with t.
+    pub thermal: ThermalBoundary,
     /// h_τ and its share.
     pub heating: Heating,
     /// Loads on the velocity equation: F(t) = Σ ∫ f·φ.
     forces: Vec<Load>,
     /// Loads on the temperature equation: ∫ g η.
     heat_sources: Vec<Load>,
-    /// k_e θ_R ∫_ΓC η: the foundation's part of the heat exchange (constant).
+    /// k_e θ_R ∫_ΓC η: the foundation's part of the heat exchange, plus the thermal conditions'
+    /// boundary loads constant in t (h θ_∞ ∫η of convection, constant fluxes).
     exchange_load: Vec<f64>,
     /// θ_ref G 1 on full velocity dofs: the thermal stress C(θ − θ_ref) has a constant part
     /// −Cθ_ref, which moves to the right-hand side as a load (zero for the paper's θ_ref = 0).
     reference_load: Vec<f64>,
-    /// θ_D at Dirichlet nodes, zero elsewhere (full temperature vector).
+    /// θ_D at Dirichlet nodes at t = 0, zero elsewhere (full temperature vector); where a
+    /// temperature condition depends on t, [`Problem::theta_dirichlet_at`] has its values.
     pub theta_dirichlet: Vec<f64>,
     /// u₀, u₁, θ₀.
     pub initial: InitialFields,
@@ -204,6 +210,8 @@ pub struct ProblemBuilder {
     contact: Vec<String>,
     symmetry: Vec<String>,
     boundary_temperature: f64,
+    /// Thermal conditions per part (part, condition, label), in the order given.
+    thermal: Vec<(String, ThermalCondition, String)>,
     /// (part name or `None` for all, scale, law, what scales the law).
     friction: Vec<GivenFriction>,
     foundation: Option<Foundation>,
@@ -242,6 +250,7 @@ impl ProblemBuilder {
             contact: Vec::new(),
             symmetry: Vec::new(),
             boundary_temperature: 0.0,
+            thermal: Vec::new(),
             friction: Vec::new(),
             foundation: None,
             exchange: Box::new(QuadraticExchange {
@@ -287,9 +296,51 @@ impl ProblemBuilder {
         self
     }
 
-    /// θ_D on Γ_D ∪ Γ_N.
+    /// θ_D on Γ_D ∪ Γ_N (on the parts given no [`ProblemBuilder::thermal`] condition).
     pub fn boundary_temperature(mut self, theta: f64) -> Self {
         self.boundary_temperature = theta;
+        self
+    }
+
+    /// The thermal condition of the boundary part `part`, replacing the paper's rule there
+    /// (θ = θ_D on Γ_D ∪ Γ_N, insulated elsewhere; see [`ThermalCondition`] and the module
+    /// [`super::thermal`] for the rules at corners). A contact part, or a part given twice, is
+    /// an error at [`ProblemBuilder::build`].
+    ///
+    /// ```
+    /// use thermocontact::material::{Isotropic, Material};
+    /// use thermocontact::model::{ProblemBuilder, ThermalCondition, TimeGrid};
+    ///
+    /// let mesh = thermocontact::mesh::rectangle(1.0, 0.2, 8, 2);
+    /// let material = Material {
+    ///     density: 1.0,
+    ///     heat_capacity: 1.0,
+    ///     viscosity: Isotropic::viscosity(1.0, 1.0),
+    ///     elasticity: Isotropic::elasticity(100.0, 0.3),
+    ///     expansion: 0.0,
+    ///     conductivity: 2.0,
+    ///     reference_temperature: 0.0,
+    /// };
+    /// let problem = ProblemBuilder::new(mesh, material, TimeGrid::new(1.0, 1))
+    ///     .dirichlet(&["left"])
+    ///     .neumann(&["top"])
+    ///     .contact(&["bottom"])
+    ///     .thermal("top", ThermalCondition::Insulated)
+    ///     .thermal("right", ThermalCondition::Convection { coefficient: 25.0, ambient: 20.0 })
+    ///     .build()
+    ///     .unwrap();
+    /// // θ = θ_D on the left only: the top's nodes, off its corner with the left, are unknowns.
+    /// assert_eq!(problem.temperature.free.iter().filter(|f| f.is_none()).count(), 3);
+    /// ```
+    pub fn thermal(self, part: &str, condition: ThermalCondition) -> Self {
+        let label = format!("the {} on `{part}`", condition.name());
+        self.labelled_thermal(part, condition, label)
+    }
+
+    /// [`ProblemBuilder::thermal`], its datum named `label` in errors (the scenario passes its
+    /// key).
+    pub fn labelled_thermal(mut self, part: &str, condition: ThermalCondition, label: String) -> Self {
+        self.thermal.push((part.to_string(), condition, label));
         self
     }
 
@@ -476,11 +527,12 @@ impl ProblemBuilder {
             }
         }
         let velocity = VelocitySpace::new(d, &bases);
-        let theta_fixed = mesh.nodes_on(&[parts.dirichlet.clone(), parts.neumann.clone()].concat());
-        let temperature = TemperatureSpace::new(&theta_fixed);
+        let thermal = thermal::resolve(&mesh, &parts, self.thermal, self.boundary_temperature)?;
+        let temperature = TemperatureSpace::new(&thermal.fixed);
 
         let (k_e, theta_r) = self.exchange.robin().unwrap_or((0.0, 0.0));
-        let matrices = assembly::assemble_matrices(&mesh, &material, &parts.contact, k_e);
+        let mut matrices = assembly::assemble_matrices(&mesh, &material, &parts.contact, k_e);
+        thermal.boundary.add_convection(&mesh, &mut matrices.conduction);
         let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
         let contact: Vec<ContactNode> = frames
             .into_iter()
@@ -531,7 +583,10 @@ impl ProblemBuilder {
             };
             list.push(Load::new(&mesh, kind, datum, label)?);
         }
-        let exchange_load = contact_weights.iter().map(|w| k_e * theta_r * w).collect();
+        let mut exchange_load: Vec<f64> = contact_weights.iter().map(|w| k_e * theta_r * w).collect();
+        if let Some(boundary_load) = &thermal.constant_load {
+            exchange_load.iter_mut().zip(boundary_load).for_each(|(e, b)| *e += b);
+        }
         let mut reference_load = vec![0.0; mesh.n_nodes() * d];
         let theta_ref = material.reference_temperature;
         if theta_ref != 0.0 {
@@ -539,10 +594,6 @@ impl ProblemBuilder {
                 .coupling
                 .mul_add(theta_ref, &vec![1.0; mesh.n_nodes()], &mut reference_load);
         }
-        let theta_dirichlet = theta_fixed
-            .iter()
-            .map(|&f| if f { self.boundary_temperature } else { 0.0 })
-            .collect();
 
         let initial = match self.initial_fields {
             None => {
@@ -590,6 +641,7 @@ impl ProblemBuilder {
             foundation: self.foundation,
             pressure,
             exchange: self.exchange,
+            thermal: thermal.boundary,
             heating: Heating {
                 law: self.heating,
                 share: self.heat_share,
@@ -599,7 +651,7 @@ impl ProblemBuilder {
             heat_sources,
             exchange_load,
             reference_load,
-            theta_dirichlet,
+            theta_dirichlet: thermal.values,
             initial,
             extra_loads: self.extra_loads,
             build_seconds: clock.elapsed().as_secs_f64(),
@@ -640,7 +692,8 @@ impl Problem {
         Ok(force)
     }
 
-    /// ∫ g(t) η + k_e θ_R ∫_ΓC η on full temperature dofs; for a nonlinear heat exchange,
+    /// ∫ g(t) η + k_e θ_R ∫_ΓC η + the thermal conditions' boundary loads (∫ q(t) η of a flux,
+    /// h θ_∞ ∫ η of convection) on full temperature dofs; for a nonlinear heat exchange,
     /// −ℓ_p ∂j(θ_p) at the nodes of Γ_C evaluated at the temperatures `exchange_at` instead
     /// (nodal quadrature, the friction's).
     pub fn heat_load(&self, t: f64, exchange_at: &[f64]) -> Result<Vec<f64>, Error> {
@@ -660,10 +713,22 @@ impl Problem {
         for load in &self.heat_sources {
             load.add_to(&self.mesh, t, &mut heat)?;
         }
+        self.thermal.add_loads(&self.mesh, t, &mut heat)?;
         if let Some(extra) = &self.extra_loads {
             extra.add_heat(self, t, &mut heat);
         }
         Ok(heat)
+    }
+
+    /// θ_D(x_p, t) at the Dirichlet nodes, zero elsewhere: [`Problem::theta_dirichlet`]
+    /// itself (borrowed) unless a temperature condition depends on t.
+    pub fn theta_dirichlet_at(&self, t: f64) -> Result<std::borrow::Cow<'_, [f64]>, Error> {
+        if !self.thermal.has_moving_temperature() {
+            return Ok(std::borrow::Cow::Borrowed(&self.theta_dirichlet));
+        }
+        let mut values = self.theta_dirichlet.clone();
+        self.thermal.update_temperatures(&self.mesh, t, &mut values)?;
+        Ok(std::borrow::Cow::Owned(values))
     }
 
     /// The friction bound b(r) at the point x and time t of the law for every part (the first
@@ -836,18 +901,23 @@ fn admissible(mesh: &Mesh, space: &VelocitySpace, full: Vec<f64>, label: &str) -
 fn no_shared_facets(mesh: &Mesh, parts: &BoundaryParts) -> Result<(), Error> {
     let roles = [&parts.dirichlet, &parts.neumann, &parts.contact, &parts.symmetry];
     let used: Vec<usize> = roles.into_iter().flatten().copied().collect();
-    let mut keys: Vec<([usize; 3], usize)> = mesh
-        .facets_of(&used)
-        .map(|f| (crate::mesh::topology::facet_key(mesh.facet(f)), mesh.facet_parts[f]))
-        .collect();
-    keys.sort_unstable();
-    match keys.windows(2).find(|w| w[0].0 == w[1].0) {
-        Some(w) => Err(Error::PartsShareFacets {
-            first: mesh.part_names[w[0].1].clone(),
-            second: mesh.part_names[w[1].1].clone(),
+    match first_shared_facet(mesh, &used) {
+        Some((first, second)) => Err(Error::PartsShareFacets {
+            first: mesh.part_names[first].clone(),
+            second: mesh.part_names[second].clone(),
         }),
         None => Ok(()),
     }
+}
+
+/// Two of `parts` that share a facet (the same vertices in two physical groups), if any.
+pub(super) fn first_shared_facet(mesh: &Mesh, parts: &[usize]) -> Option<(usize, usize)> {
+    let mut keys: Vec<([usize; 3], usize)> = mesh
+        .facets_of(parts)
+        .map(|f| (crate::mesh::topology::facet_key(mesh.facet(f)), mesh.facet_parts[f]))
+        .collect();
+    keys.sort_unstable();
+    keys.windows(2).find(|w| w[0].0 == w[1].0).map(|w| (w[0].1, w[1].1))
 }
 
 /// Per node, the unit normals of the symmetry planes through it.

@@ -30,8 +30,12 @@ pub struct StepMatrix {
 /// What the right-hand side of a step and the state of a solution need besides the matrix: the
 /// iterative path keeps this and lets the symmetric form go once it has its own copy of A.
 pub struct StepRhs {
-    /// Contributions of θ_D to the right-hand side (moved over from the matrix).
+    /// Contributions of θ_D to the right-hand side (moved over from the matrix), from the
+    /// Dirichlet nodes whose θ_D is constant in t.
     lift: Vec<f64>,
+    /// (row, node, a): the entries a of the matrix columns of the Dirichlet nodes whose θ_D
+    /// depends on t; their lift Σ a θ_D(x_node, t) is formed at each step (empty otherwise).
+    moving_lift: Vec<(usize, usize, f64)>,
     n_w: usize,
     k: f64,
 }
@@ -87,19 +91,29 @@ pub fn assemble_by_columns(
     let mats = &problem.matrices;
     let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
 
-    // The θ_D lift: the columns of prescribed temperatures, moved to the right-hand side.
+    // The θ_D lift: the columns of prescribed temperatures, moved to the right-hand side (kept
+    // as entries where θ_D depends on t).
     let theta_d = &problem.theta_dirichlet;
+    let thermal = &problem.thermal;
     let mut lift = vec![0.0; n];
+    let mut moving_lift = Vec::new();
+    let mut lift_entry = |r: usize, q: usize, a: f64| {
+        if thermal.is_moving(q) {
+            moving_lift.push((r, q, a));
+        } else {
+            lift[r] += a * theta_d[q];
+        }
+    };
     for (row, q, g) in coupling.triplets() {
         if temp.free[q].is_none() {
             for &(r, a) in vel.row(row) {
-                lift[r] += a * g * theta_d[q];
+                lift_entry(r, q, a * g);
             }
         }
     }
     for (idx, (p, q, _)) in heat_mass.triplets().enumerate() {
         if let (Some(r), None) = (temp.free[p], temp.free[q]) {
-            lift[n_w + r] += (heat_mass.values[idx] / k + mats.conduction.values[idx]) * theta_d[q];
+            lift_entry(n_w + r, q, heat_mass.values[idx] / k + mats.conduction.values[idx]);
         }
     }
 
@@ -189,7 +203,12 @@ pub fn assemble_by_columns(
         }
         emit(&column);
     }
-    StepRhs { lift, n_w, k }
+    StepRhs {
+        lift,
+        moving_lift,
+        n_w,
+        k,
+    }
 }
 
 impl StepRhs {
@@ -233,6 +252,12 @@ impl StepRhs {
             }
         }
         rhs.iter_mut().zip(&self.lift).for_each(|(b, l)| *b -= l);
+        if !self.moving_lift.is_empty() {
+            let theta_d = problem.theta_dirichlet_at(t)?;
+            for &(r, q, a) in &self.moving_lift {
+                rhs[r] -= a * theta_d[q];
+            }
+        }
         Ok(rhs)
     }
 
@@ -253,11 +278,15 @@ impl StepRhs {
     pub fn state_from(&self, problem: &Problem, previous: &State, t: f64, x: &[f64], xi: Vec<f64>) -> State {
         let w = problem.velocity.prolong(&x[..self.n_w]);
         let u = previous.u.iter().zip(&w).map(|(u, w)| u + self.k * w).collect();
+        // θ_D(t) was evaluated without error by the step's right-hand side at the same t.
+        let theta_d = problem
+            .theta_dirichlet_at(t)
+            .expect("θ_D evaluated by the step's right-hand side");
         let theta = problem
             .temperature
             .free
             .iter()
-            .zip(&problem.theta_dirichlet)
+            .zip(theta_d.iter())
             .map(|(free, &fixed)| free.map_or(fixed, |r| x[self.n_w + r]))
             .collect();
         let mut state = State {

@@ -7,7 +7,7 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::validate::{invalid, MAX_MAGNITUDE};
-use super::{Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, Traction};
+use super::{Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, ThermalSpec, Traction, THERMAL_CONDITIONS};
 use crate::contact::{
     Coulomb, ExpressionExchange, ExpressionFriction, ExpressionHeating, Foundation, FrictionLaw, FrictionalHeating,
     HeatExchange, LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction,
@@ -18,7 +18,7 @@ use crate::error::Error;
 use crate::loads::{Datum, Expression};
 use crate::material::{Isotropic, Material};
 use crate::mesh::{self, Mesh};
-use crate::model::{InitialFields, LoadTarget, ModelError, Problem, ProblemBuilder, State, TimeGrid};
+use crate::model::{InitialFields, LoadTarget, ModelError, Problem, ProblemBuilder, State, ThermalCondition, TimeGrid};
 use crate::step::{KrylovParams, SolverParams};
 
 impl Scenario {
@@ -46,6 +46,82 @@ impl Scenario {
                 )
             })?),
         })
+    }
+}
+
+/// The condition of one `[[thermal]]` table; errors name `key` (`thermal[i]`) and its keys:
+/// an unknown condition (with the list), a key the condition needs and lacks, or one it does
+/// not take, a value out of range.
+pub(super) fn thermal_condition(key: &str, spec: &ThermalSpec) -> Result<ThermalCondition, Error> {
+    let at = |name: &str| format!("{key}.{name}");
+    let needs: &[&str] = match spec.condition.as_str() {
+        "insulated" => &[],
+        "temperature" | "flux" => &["value"],
+        "convection" => &["coefficient", "ambient"],
+        other => {
+            let names: Vec<String> = THERMAL_CONDITIONS.iter().map(|c| format!("\"{c}\"")).collect();
+            return Err(invalid(
+                &at("condition"),
+                &other,
+                &format!("one of {}", names.join(", ")),
+            ));
+        }
+    };
+    let takes = if needs.is_empty() {
+        "no other key".to_string()
+    } else {
+        needs.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(" and ")
+    };
+    let given = [
+        ("value", spec.value.as_ref().map(|v| v.to_string())),
+        ("coefficient", spec.coefficient.map(|v| v.to_string())),
+        ("ambient", spec.ambient.map(|v| v.to_string())),
+    ];
+    for (name, value) in given {
+        match (value, needs.contains(&name)) {
+            (Some(value), false) => {
+                return Err(Error::InvalidValue {
+                    key: at(name),
+                    value,
+                    expected: format!("no `{name}`: condition = \"{}\" takes {takes}", spec.condition),
+                })
+            }
+            (None, true) => {
+                return Err(invalid(
+                    &at(name),
+                    &"(missing)",
+                    &format!("a value: condition = \"{}\" takes {takes}", spec.condition),
+                ))
+            }
+            _ => {}
+        }
+    }
+    Ok(match spec.condition.as_str() {
+        "insulated" => ThermalCondition::Insulated,
+        "temperature" => ThermalCondition::Temperature(datum_of(spec, &at("value"))?),
+        "flux" => ThermalCondition::Flux(datum_of(spec, &at("value"))?),
+        _ => {
+            let (coefficient, ambient) = (spec.coefficient.unwrap_or(0.0), spec.ambient.unwrap_or(0.0));
+            if !(coefficient.is_finite() && (0.0..=MAX_MAGNITUDE).contains(&coefficient)) {
+                return Err(invalid(
+                    &at("coefficient"),
+                    &coefficient,
+                    "a heat transfer coefficient h ≥ 0 (at most 1e18)",
+                ));
+            }
+            if !(ambient.is_finite() && ambient.abs() <= MAX_MAGNITUDE) {
+                return Err(invalid(&at("ambient"), &ambient, "a finite number of magnitude ≤ 1e18"));
+            }
+            ThermalCondition::Convection { coefficient, ambient }
+        }
+    })
+}
+
+/// The scalar datum `value` of a thermal table (present: checked by the caller).
+fn datum_of(spec: &ThermalSpec, key: &str) -> Result<Datum, Error> {
+    match &spec.value {
+        Some(value) => value.to_datum(key, 1),
+        None => Err(Error::MissingKey { key: key.to_string() }),
     }
 }
 
@@ -492,6 +568,11 @@ impl Scenario {
             let key = format!("loads.pressure[{i}].value");
             let datum = p.value.to_datum(&key, 1)?;
             builder = builder.labelled_load(LoadTarget::Pressure(p.part.clone()), datum, key);
+        }
+        for (i, spec) in self.thermal.iter().enumerate() {
+            let key = format!("thermal[{i}]");
+            let condition = thermal_condition(&key, spec)?;
+            builder = builder.labelled_thermal(&spec.part, condition, format!("{key}.value"));
         }
         Ok(builder)
     }

@@ -367,6 +367,7 @@ const OPTIONAL_KEYS: &[&str] = &[
     "foundation",
     "frictional_heating.value",
     "frictional_heating.friction_power",
+    "thermal",
 ];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace

@@ -30,6 +30,10 @@ pub struct Scenario {
     pub foundation: Option<FoundationSpec>,
     pub heat_exchange: HeatExchangeSpec,
     pub frictional_heating: FrictionalHeatingSpec,
+    /// Thermal conditions per boundary part (`[[thermal]]`); parts not listed keep the paper's
+    /// rule.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub thermal: Vec<ThermalSpec>,
     pub solver: SolverSpec,
     pub output: OutputSpec,
     /// The mesh read from `mesh.file`, kept from validation to the build.
@@ -551,6 +555,29 @@ pub struct FrictionalHeatingSpec {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub friction_power: bool,
 }
+
+/// A thermal condition on one boundary part (`[[thermal]]`): `condition` is one of
+/// [`THERMAL_CONDITIONS`], with its keys: `value` (a datum) for "temperature" and "flux",
+/// `coefficient` and `ambient` for "convection", none for "insulated". The condition is a
+/// string rather than a tag so that a wrong one is named with its key and the list.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalSpec {
+    pub part: String,
+    pub condition: String,
+    /// θ_D (temperature) or the heat flux into the body (flux).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<DatumSpec>,
+    /// h of convection.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coefficient: Option<f64>,
+    /// θ_∞ of convection.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ambient: Option<f64>,
+}
+
+/// The values of `thermal.condition`.
+pub const THERMAL_CONDITIONS: [&str; 4] = ["insulated", "temperature", "flux", "convection"];
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -57,6 +57,7 @@ impl Scenario {
         self.validate_material(d)?;
         self.validate_data(d)?;
         self.validate_laws()?;
+        self.validate_thermal()?;
         self.validate_solver()?;
         self.validate_output()
     }
@@ -199,6 +200,38 @@ impl Scenario {
             return Err(invalid("frictional_heating.share", &share, "a fraction in [0, 1]"));
         }
         self.frictional_heating()?;
+        Ok(())
+    }
+
+    /// The thermal conditions: each on a boundary part of the mesh that is not a contact part,
+    /// no part twice, each condition with its keys (built once, as the run would).
+    fn validate_thermal(&self) -> Result<(), Error> {
+        let parts = self.part_names();
+        for (i, spec) in self.thermal.iter().enumerate() {
+            let key = format!("thermal[{i}].part");
+            if !parts.contains(&spec.part) {
+                return Err(invalid(
+                    &key,
+                    &spec.part,
+                    &format!("a boundary part of the mesh, among {parts:?}"),
+                ));
+            }
+            if self.boundary.contact.contains(&spec.part) {
+                return Err(invalid(
+                    &key,
+                    &spec.part,
+                    "a part that is not in boundary.contact (Γ_C has its own heat exchange law, [heat_exchange])",
+                ));
+            }
+            if let Some(j) = self.thermal[..i].iter().position(|t| t.part == spec.part) {
+                return Err(invalid(
+                    &key,
+                    &spec.part,
+                    &format!("each part in at most one [[thermal]] table (thermal[{j}] has it already)"),
+                ));
+            }
+            super::build::thermal_condition(&format!("thermal[{i}]"), spec)?;
+        }
         Ok(())
     }
 
