@@ -28,7 +28,7 @@ pub use build::differing_keys;
 pub use load::{DEFAULT_TOML, MAX_SCENARIO_BYTES};
 pub use schema::{
     Affine, BoundarySpec, DatumSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry, HeatExchangeSpec,
-    InitialSpec, Loads, MaterialSpec, MeshSpec, OutputSpec, Pressure, Scenario, SolverSpec, Structured, TimeSpec,
+    InitialSpec, Loads, MaterialSpec, MeshSpec, OutputSpec, Pressure, RegionSpec, Scenario, SolverSpec, Structured, TimeSpec,
     Traction,
 };
 pub use validate::{
