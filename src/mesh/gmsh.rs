@@ -391,7 +391,12 @@ impl Raw {
                 }
             }
         }
-        let name = |dim: usize, group: i32| self.names.get(&(dim, group)).cloned().unwrap_or_else(|| group.to_string());
+        let name = |dim: usize, group: i32| {
+            self.names
+                .get(&(dim, group))
+                .cloned()
+                .unwrap_or_else(|| group.to_string())
+        };
         let mut facets = Vec::new();
         let mut facet_parts = Vec::new();
         let mut part_names = Vec::new();

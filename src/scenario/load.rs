@@ -478,7 +478,11 @@ fn regions(base: &Table, value: Value) -> Result<Value, Error> {
     let Value::Array(items) = value else {
         return Err(invalid("regions", &value.to_string(), form));
     };
-    let mut allowed = base.get("material").and_then(Value::as_table).cloned().unwrap_or_default();
+    let mut allowed = base
+        .get("material")
+        .and_then(Value::as_table)
+        .cloned()
+        .unwrap_or_default();
     allowed.insert("part".into(), Value::String(String::new()));
     let mut checked = Vec::with_capacity(items.len());
     for (i, item) in items.into_iter().enumerate() {
