@@ -53,11 +53,20 @@ fn layered(length: f64, height: f64, nx: usize, ny: usize, interface: f64) -> Me
 /// piecewise linear, q x/k₁ up to the interface, then of slope q/k₂. The P1 space holds that
 /// profile (the interface is a column of nodes), so the discrete steady state is it to round-off:
 /// checked at every node to 10⁻⁹ of θ_R. (One conductivity for both layers would miss the
-/// interface temperature by 25 %.)
+/// interface temperature by 45 %.)
 #[test]
 fn steady_conduction_through_two_layers_matches_the_series_resistances() {
+    // The structured rectangle with its layers, and Gmsh's unstructured one (tests/meshes/layers.geo).
+    for mesh in [
+        layered(2.0, 0.5, 16, 2, 0.5),
+        read_msh(&meshes().join("layers_41.msh")).unwrap(),
+    ] {
+        conduction_through_layers(mesh);
+    }
+}
+
+fn conduction_through_layers(mesh: Mesh) {
     let (length, interface, k1, k2, k_e, theta_r) = (2.0, 0.5, 1.0, 4.0, 2.0, 10.0);
-    let mesh = layered(length, 0.5, 16, 2, interface);
     // Diffusion time ρ c_p L²/k ≈ 4·10⁻⁷ against steps of 0.05: steady after a step or two.
     let problem = ProblemBuilder::new(mesh, material(k1, 100.0), TimeGrid::new(1.0, 20))
         .region("second", material(k2, 100.0))
@@ -351,6 +360,60 @@ fn regions_change_the_scenario_fingerprint() {
     assert_ne!(a.fingerprint(), b.fingerprint());
     let keys = thermocontact::scenario::differing_keys(&a.to_toml(), &b.to_toml());
     assert!(keys.iter().any(|k| k.starts_with("regions")), "{keys:?}");
+}
+
+fn meshes() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/meshes")
+}
+
+/// Gmsh's files of tests/meshes/layers.geo: the two surfaces are the regions `first` and
+/// `second` in MSH 4.1 ASCII and binary and MSH 2.2, each cell in the layer of its centre.
+#[test]
+fn gmsh_cell_groups_are_read_as_regions_in_every_format() {
+    let reference = read_msh(&meshes().join("layers_41.msh")).unwrap();
+    for file in ["layers_41.msh", "layers_41_binary.msh", "layers_22.msh"] {
+        let m = read_msh(&meshes().join(file)).unwrap();
+        assert_eq!(m.region_names(), vec!["first", "second"], "{file}");
+        assert_eq!(m.n_cells(), reference.n_cells(), "{file}");
+        let counted: usize = m.regions.iter().map(|r| r.cells.len()).sum();
+        assert_eq!(counted, m.n_cells(), "{file}: every cell in one region");
+        for (r, region) in m.regions.iter().enumerate() {
+            for &e in &region.cells {
+                let x = m.cell_coords(e as usize).iter().map(|p| p[0]).sum::<f64>() / 3.0;
+                assert_eq!(x < 0.5, r == 0, "{file}: cell {e} at x = {x}");
+            }
+        }
+    }
+    // Every cell also in the group `slab` (layers_overlap.geo): MSH 2.2 lists such cells twice,
+    // MSH 4.1 once on an entity of two groups; both read as the same cells.
+    for file in ["layers_overlap_22.msh", "layers_overlap_41.msh"] {
+        let m = read_msh(&meshes().join(file)).unwrap();
+        assert_eq!(m.n_cells(), reference.n_cells(), "{file}");
+        assert_eq!(m.region_names(), vec!["first", "second", "slab"], "{file}");
+        assert_eq!(m.regions[2].cells.len(), m.n_cells(), "{file}");
+        // A scenario giving materials to `slab` and `first`: refused naming a cell and both.
+        let text = format!(
+            "[mesh]\nfile = {:?}\n[[regions]]\npart = \"slab\"\n[[regions]]\npart = \"first\"\nyoung = 2e4\n",
+            meshes().join(file).to_str().unwrap()
+        );
+        let e = Scenario::load(Some(&text), &[])
+            .unwrap()
+            .build()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("regions[1].part") && e.contains("cell") && e.contains("`slab`") && e.contains("`first`"),
+            "{e}"
+        );
+        // Without [[regions]]: a warning that the three merge.
+        let text = format!("[mesh]\nfile = {:?}\n", meshes().join(file).to_str().unwrap());
+        let s = Scenario::load(Some(&text), &[]).unwrap();
+        assert!(
+            s.warnings.iter().any(|w| w.contains("3 cell regions")),
+            "{:?}",
+            s.warnings
+        );
+    }
 }
 
 fn scratch(name: &str) -> std::path::PathBuf {
