@@ -467,8 +467,8 @@ fn at_least_one(key: &str, v: usize) -> Result<(), Error> {
 /// The keys behind the step matrix, named for an error of its linear algebra.
 const STEP_MATRIX_KEYS: &str = "It is built from material.density, material.young, material.poisson, \
      material.viscosity_mu1, material.viscosity_mu2, material.conductivity, material.heat_capacity, \
-     material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps (k): check their \
-     magnitudes";
+     material.thermal_expansion (and these keys of [[regions]]), heat_exchange.coefficient, the mesh's cell sizes \
+     and time.steps (k): check their magnitudes";
 
 /// The keys of a step's data (its right-hand side and contact terms), named first for a
 /// non-finite solve: the scenario's numbers are bounded (magnitudes ≤ 10¹⁸) where expressions
@@ -503,8 +503,8 @@ mod tests {
     fn keys_behind_names_the_keys_of_a_failed_step_matrix() {
         let expected = "It is built from material.density, material.young, material.poisson, material.viscosity_mu1, \
                         material.viscosity_mu2, material.conductivity, material.heat_capacity, \
-                        material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps \
-                        (k): check their magnitudes";
+                        material.thermal_expansion (and these keys of [[regions]]), heat_exchange.coefficient, \
+                        the mesh's cell sizes and time.steps (k): check their magnitudes";
         let factorization = Error::Step(StepError::La(LaError::Factorization {
             stage: FactorStage::Numeric,
             detail: "zero pivot".into(),
