@@ -18,7 +18,8 @@
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
 //! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`), each with a `try_` variant that
 //! returns what [`Mesh::new`] finds wrong (too elongated cells) as an error instead of panicking. Files: [`read_msh`] reads Gmsh
-//! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
+//! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts (dimension
+//! d − 1) and cell regions (dimension d), and
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 //!
