@@ -76,6 +76,44 @@ impl Material {
     }
 }
 
+/// The material of each cell of a body made of several (a friction lining on a steel
+/// backplate): the materials, and one small index per cell into them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellMaterials {
+    /// The materials; the first is the body's, that of every cell no other is given to.
+    pub materials: Vec<Material>,
+    /// The index into `materials` of each cell; empty when every cell takes the first (2 bytes
+    /// per cell otherwise: at most 65 536 materials).
+    pub of_cell: Vec<u16>,
+}
+
+impl CellMaterials {
+    /// One material for every cell.
+    pub fn uniform(material: Material) -> Self {
+        CellMaterials {
+            materials: vec![material],
+            of_cell: Vec::new(),
+        }
+    }
+
+    /// The material of cell `e`.
+    pub fn of(&self, e: usize) -> &Material {
+        &self.materials[self.of_cell.get(e).map_or(0, |&k| usize::from(k))]
+    }
+
+    /// The body's material (of the cells no other is given to).
+    pub fn base(&self) -> &Material {
+        &self.materials[0]
+    }
+
+    /// The one material of every cell, when the materials are all equal (also when several
+    /// equal ones were given): what the computations that hold for one material use.
+    pub fn uniform_material(&self) -> Option<&Material> {
+        let first = &self.materials[0];
+        self.materials.iter().all(|m| m == first).then_some(first)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -453,12 +453,24 @@ impl PyMesh {
         Ok(dict)
     }
 
+    /// dict: cell region name (a Gmsh physical group of dimension d) -> int64 array of its
+    /// cells, ascending (new arrays); empty for the generators' meshes.
+    #[getter]
+    fn regions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for region in &self.inner.regions {
+            let cells: Vec<i64> = region.cells.iter().map(|&e| i64::from(e)).collect();
+            dict.set_item(&region.name, PyArray::from_vec(py, cells))?;
+        }
+        Ok(dict)
+    }
+
     /// |Ω|, the sum of the cell measures.
     fn volume(&self) -> f64 {
         self.inner.volume()
     }
 
-    /// Writes the mesh as a Gmsh MSH 4.1 ASCII file (boundary parts as physical groups), which
+    /// Writes the mesh as a Gmsh MSH 4.1 ASCII file (boundary parts and cell regions as physical groups), which
     /// a scenario's `mesh.file` and Mesh.read take back.
     fn write_msh(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let text = mesh::msh_text(&self.inner);

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::kernels;
 use crate::la::{ColumnsMut, CscMatrix, NodeGraph};
-use crate::material::{Isotropic, Material};
+use crate::material::{CellMaterials, Isotropic, Material};
 use crate::mesh::simplex::{facet_measure, Simplex};
 use crate::mesh::Mesh;
 
@@ -32,9 +32,21 @@ pub struct Matrices {
     pub gradient_gram: CscMatrix,
 }
 
-/// Assembles every volume matrix in one parallel sweep over the cells, and the Robin term
-/// `robin_coefficient · ∫ θ η` on the facets of `robin_parts`.
+/// [`assemble_cell_materials`] for a body of one material.
 pub fn assemble_matrices(mesh: &Mesh, material: &Material, robin_parts: &[usize], robin_coefficient: f64) -> Matrices {
+    assemble_cell_materials(mesh, &CellMaterials::uniform(*material), robin_parts, robin_coefficient)
+}
+
+/// Assembles every volume matrix in one parallel sweep over the cells, each cell with its own
+/// material, and the Robin term `robin_coefficient · ∫ θ η` on the facets of `robin_parts`.
+/// With one material the operations are those of a sweep with that material alone, in the same
+/// order: the same bits.
+pub fn assemble_cell_materials(
+    mesh: &Mesh,
+    materials: &CellMaterials,
+    robin_parts: &[usize],
+    robin_coefficient: f64,
+) -> Matrices {
     let d = mesh.dim;
     let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
     let vector = CscMatrix::from_graph(&graph, d, d);
@@ -79,6 +91,7 @@ pub fn assemble_matrices(mesh: &Mesh, material: &Material, robin_parts: &[usize]
             if !nodes.iter().any(|q| owned.contains(q)) {
                 continue;
             }
+            let material = materials.of(e);
             let t = Simplex::new(d, &mesh.cell_coords(e));
             let mass = kernels::scalar_mass(&t);
             let lap = kernels::laplacian(&t);
@@ -138,6 +151,29 @@ pub fn add_boundary_mass(mesh: &Mesh, parts: &[usize], coefficient: f64, matrix:
             }
         }
     }
+}
+
+/// θ_ref G 1 with each cell's own expansion c and reference temperature θ_ref: the load
+/// Σ_e c_e θ_ref,e ∫_e div φ of the constant part −Cθ_ref of the thermal stress (full velocity
+/// dofs). For one material it is `coupling · (θ_ref 1)`, which the caller computes so.
+pub fn reference_load(mesh: &Mesh, materials: &CellMaterials) -> Vec<f64> {
+    let d = mesh.dim;
+    let mut load = vec![0.0; mesh.n_nodes() * d];
+    for e in 0..mesh.n_cells() {
+        let material = materials.of(e);
+        let scale = material.expansion * material.reference_temperature;
+        if scale == 0.0 {
+            continue;
+        }
+        let div = kernels::divergence_coupling(&Simplex::new(d, &mesh.cell_coords(e)));
+        let nodes = mesh.cell(e);
+        for (a, &p) in nodes.iter().enumerate() {
+            for i in 0..d {
+                load[p * d + i] += scale * (0..nodes.len()).map(|b| div[a * d + i][b]).sum::<f64>();
+            }
+        }
+    }
+    load
 }
 
 /// ∫_Ω f · φ for a constant vector f: a full velocity-dof load vector.

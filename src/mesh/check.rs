@@ -212,6 +212,7 @@ impl Mesh {
             facets,
             facet_parts,
             part_names,
+            regions: Vec::new(),
         };
         mesh.check_cells()?;
         let faces = topology::cell_faces(&mesh);

@@ -13,7 +13,11 @@
 //! 3D. Boundary parts are the **physical groups** of dimension d − 1, named by `$PhysicalNames`
 //! (the tag as a decimal string when unnamed), their facets the 2-node lines (type 1) or 3-node
 //! triangles (type 2) of the group's entities. A facet in several physical groups is stored
-//! once per group. Elements of dimension d − 1 in no physical group are dropped, and so are
+//! once per group. **Cell regions** are the physical groups of dimension d
+//! ([`super::CellRegion`], named likewise): every cell of dimension d is read, in a group or
+//! not, and each group keeps the list of its cells; a cell in two groups is in both lists
+//! (MSH 2.2 writes such a cell once per group: the repeats, with the same nodes, are one cell).
+//! Elements of dimension d − 1 in no physical group are dropped, and so are
 //! nodes no element refers to (Gmsh lists geometry points, e.g. the centre of a circle arc, when
 //! the whole model is saved). Second-order elements, quadrangles, hexahedra, prisms and
 //! pyramids of dimension d or d − 1 are refused with what to change in Gmsh. A partitioned mesh
@@ -23,7 +27,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::{Mesh, MeshError};
+use super::{CellRegion, Mesh, MeshError};
 
 /// Reads a Gmsh `.msh` file (MSH 4.1 ASCII or binary, MSH 2.2 ASCII).
 pub fn read_msh(path: &Path) -> Result<Mesh, MeshError> {
@@ -341,6 +345,81 @@ impl Raw {
                 advice: advice(b.code).to_string(),
             });
         }
+        let (used, coords) = self.node_indices(path)?;
+        let index = |tag: &u64| -> Result<usize, MeshError> {
+            used.get(tag).copied().flatten().ok_or_else(|| MeshError::Format {
+                path: path.to_path_buf(),
+                message: format!("an element refers to node {tag}, which $Nodes does not list"),
+            })
+        };
+        let mut cells = Vec::new();
+        // Physical group tag → its facets' nodes (dimension d − 1), its cells (dimension d).
+        let mut parts: BTreeMap<i32, Vec<usize>> = BTreeMap::new();
+        let mut groups_of_cells: BTreeMap<i32, Vec<u32>> = BTreeMap::new();
+        // MSH 2.2 lists a cell once per physical group it is in: the repeats are one cell.
+        let mut listed: HashMap<[u64; 4], u32> = HashMap::new();
+        for (i, b) in self.blocks.iter().enumerate() {
+            let groups: &[i32] = match &self.element_groups {
+                Some(per_element) => &per_element[i],
+                None => self.entity_groups.get(&(b.dim, b.entity)).map_or(&[], Vec::as_slice),
+            };
+            if b.dim == dim {
+                for element in b.nodes.chunks_exact(dim + 1) {
+                    let mut key = [0; 4];
+                    key[..=dim].copy_from_slice(element);
+                    key.sort_unstable();
+                    let fresh = (cells.len() / (dim + 1)) as u32;
+                    let cell = match self.element_groups {
+                        Some(_) => *listed.entry(key).or_insert(fresh),
+                        None => fresh,
+                    };
+                    if cell == fresh {
+                        for tag in element {
+                            cells.push(index(tag)?);
+                        }
+                    }
+                    for &group in groups {
+                        groups_of_cells.entry(group).or_default().push(cell);
+                    }
+                }
+            } else if b.dim + 1 == dim {
+                for &group in groups {
+                    let facets = parts.entry(group).or_default();
+                    for tag in &b.nodes {
+                        facets.push(index(tag)?);
+                    }
+                }
+            }
+        }
+        let name = |dim: usize, group: i32| {
+            self.names
+                .get(&(dim, group))
+                .cloned()
+                .unwrap_or_else(|| group.to_string())
+        };
+        let mut facets = Vec::new();
+        let mut facet_parts = Vec::new();
+        let mut part_names = Vec::new();
+        for (k, (group, nodes)) in parts.into_iter().enumerate() {
+            facet_parts.extend(std::iter::repeat_n(k, nodes.len() / dim));
+            facets.extend(nodes);
+            part_names.push(name(dim - 1, group));
+        }
+        let regions = (groups_of_cells.into_iter())
+            .map(|(group, cells)| CellRegion {
+                name: name(dim, group),
+                cells,
+            })
+            .collect();
+        Mesh::new(dim, coords, cells, facets, facet_parts, part_names)
+            .and_then(|mesh| mesh.with_regions(regions))
+            .map_err(|e| e.in_file(path))
+    }
+
+    /// Node tags → compact indices, in order of the file, keeping the nodes some element uses;
+    /// and their coordinates. A node defined twice is an error.
+    #[allow(clippy::type_complexity)]
+    fn node_indices(&self, path: &Path) -> Result<(HashMap<u64, Option<usize>>, Vec<[f64; 3]>), MeshError> {
         // A node defined twice would be moved silently by its later definition.
         let mut defined = std::collections::HashSet::with_capacity(self.nodes.len());
         if let Some((tag, _)) = self.nodes.iter().find(|(tag, _)| !defined.insert(*tag)) {
@@ -349,7 +428,6 @@ impl Raw {
                 message: format!("node {tag} is defined twice in $Nodes (each node tag once)"),
             });
         }
-        // Node tags → compact indices, in order of the file, keeping nodes some element uses.
         let mut used: HashMap<u64, Option<usize>> = HashMap::new();
         for b in &self.blocks {
             for &tag in &b.nodes {
@@ -363,43 +441,7 @@ impl Raw {
                 coords.push(*x);
             }
         }
-        let index = |tag: &u64| -> Result<usize, MeshError> {
-            used.get(tag).copied().flatten().ok_or_else(|| MeshError::Format {
-                path: path.to_path_buf(),
-                message: format!("an element refers to node {tag}, which $Nodes does not list"),
-            })
-        };
-        let mut cells = Vec::new();
-        // Physical group tag → (its facets' nodes).
-        let mut parts: BTreeMap<i32, Vec<usize>> = BTreeMap::new();
-        for (i, b) in self.blocks.iter().enumerate() {
-            if b.dim == dim {
-                for tag in &b.nodes {
-                    cells.push(index(tag)?);
-                }
-            } else if b.dim + 1 == dim {
-                let groups: &[i32] = match &self.element_groups {
-                    Some(per_element) => &per_element[i],
-                    None => self.entity_groups.get(&(b.dim, b.entity)).map_or(&[], Vec::as_slice),
-                };
-                for &group in groups {
-                    let facets = parts.entry(group).or_default();
-                    for tag in &b.nodes {
-                        facets.push(index(tag)?);
-                    }
-                }
-            }
-        }
-        let mut facets = Vec::new();
-        let mut facet_parts = Vec::new();
-        let mut part_names = Vec::new();
-        for (k, (group, nodes)) in parts.into_iter().enumerate() {
-            facet_parts.extend(std::iter::repeat_n(k, nodes.len() / dim));
-            facets.extend(nodes);
-            let name = self.names.get(&(dim - 1, group)).cloned();
-            part_names.push(name.unwrap_or_else(|| group.to_string()));
-        }
-        Mesh::new(dim, coords, cells, facets, facet_parts, part_names).map_err(|e| e.in_file(path))
+        Ok((used, coords))
     }
 }
 
@@ -586,28 +628,49 @@ impl Cursor<'_> {
 }
 
 /// The mesh as MSH 4.1 ASCII: one entity per boundary part with a physical group of that name
-/// (tags 1, 2, …), the cells on one entity with the physical group `domain`. Node tags are the
-/// indices + 1. Reading the text back with [`read_msh`] gives the same mesh.
+/// (tags 1, 2, …); the cells on one entity per set of cell regions they are in (entity 1 first,
+/// the cells in none, without a physical group), each region a physical group of dimension d
+/// (tags after the parts'). Node tags are the indices + 1. Reading the text back with
+/// [`read_msh`] gives the same mesh, regions included (a mesh with regions comes back with its
+/// cells grouped by the regions they are in, in their order within each group).
 pub fn msh_text(mesh: &Mesh) -> String {
     let d = mesh.dim;
     let n_parts = mesh.part_names.len();
+    // The cells of each set of regions, the set of no region first.
+    let mut in_regions: Vec<Vec<usize>> = vec![Vec::new(); mesh.n_cells()];
+    for (r, region) in mesh.regions.iter().enumerate() {
+        for &e in &region.cells {
+            in_regions[e as usize].push(n_parts + 1 + r);
+        }
+    }
+    let mut entities: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
+    for (e, groups) in in_regions.into_iter().enumerate() {
+        entities.entry(groups).or_default().push(e);
+    }
     let mut s = String::new();
     let _ = writeln!(s, "$MeshFormat\n4.1 0 8\n$EndMeshFormat");
-    let _ = writeln!(s, "$PhysicalNames\n{}", n_parts + 1);
+    let _ = writeln!(s, "$PhysicalNames\n{}", n_parts + mesh.regions.len());
     for (k, name) in mesh.part_names.iter().enumerate() {
         let _ = writeln!(s, "{} {} \"{name}\"", d - 1, k + 1);
     }
-    let _ = writeln!(s, "{d} {} \"domain\"\n$EndPhysicalNames", n_parts + 1);
-    // Entities: no points; the parts' entities of dimension d − 1 and one of dimension d. The
-    // bounding boxes are not used by readers of meshes; zeros keep the text short.
+    for (r, region) in mesh.regions.iter().enumerate() {
+        let _ = writeln!(s, "{d} {} \"{}\"", n_parts + 1 + r, region.name);
+    }
+    let _ = writeln!(s, "$EndPhysicalNames");
+    // Entities: no points; the parts' entities of dimension d − 1 and the cells' of dimension d.
+    // The bounding boxes are not used by readers of meshes; zeros keep the text short.
     let mut counts = [0usize; 4];
     counts[d - 1] = n_parts;
-    counts[d] = 1;
+    counts[d] = entities.len();
     let _ = writeln!(s, "$Entities\n{} {} {} {}", counts[0], counts[1], counts[2], counts[3]);
     for k in 0..n_parts {
         let _ = writeln!(s, "{} 0 0 0 0 0 0 1 {} 0", k + 1, k + 1);
     }
-    let _ = writeln!(s, "1 0 0 0 0 0 0 1 {} 0\n$EndEntities", n_parts + 1);
+    for (k, groups) in entities.keys().enumerate() {
+        let tags: String = groups.iter().map(|g| format!(" {g}")).collect();
+        let _ = writeln!(s, "{} 0 0 0 0 0 0 {}{tags} 0", k + 1, groups.len());
+    }
+    let _ = writeln!(s, "$EndEntities");
     let n = mesh.n_nodes();
     let _ = writeln!(s, "$Nodes\n1 {n} 1 {n}\n{d} 1 0 {n}");
     for p in 1..=n {
@@ -618,23 +681,25 @@ pub fn msh_text(mesh: &Mesh) -> String {
     }
     let _ = writeln!(s, "$EndNodes");
     let n_elements = mesh.n_cells() + mesh.n_facets();
-    let _ = writeln!(s, "$Elements\n{} {n_elements} 1 {n_elements}", n_parts + 1);
+    let _ = writeln!(s, "$Elements\n{} {n_elements} 1 {n_elements}", n_parts + entities.len());
     let mut tag = 0;
     let (cell_code, facet_code) = if d == 2 { (2, 1) } else { (4, 2) };
-    for k in 0..n_parts {
-        let facets: Vec<usize> = (0..mesh.n_facets()).filter(|&f| mesh.facet_parts[f] == k).collect();
-        let _ = writeln!(s, "{} {} {facet_code} {}", d - 1, k + 1, facets.len());
-        for f in facets {
+    let mut write_elements = |s: &mut String, header: String, elements: &mut dyn Iterator<Item = &[usize]>| {
+        let _ = writeln!(s, "{header}");
+        for nodes in elements {
             tag += 1;
-            let nodes: Vec<String> = mesh.facet(f).iter().map(|p| (p + 1).to_string()).collect();
+            let nodes: Vec<String> = nodes.iter().map(|p| (p + 1).to_string()).collect();
             let _ = writeln!(s, "{tag} {}", nodes.join(" "));
         }
+    };
+    for k in 0..n_parts {
+        let facets: Vec<usize> = (0..mesh.n_facets()).filter(|&f| mesh.facet_parts[f] == k).collect();
+        let header = format!("{} {} {facet_code} {}", d - 1, k + 1, facets.len());
+        write_elements(&mut s, header, &mut facets.iter().map(|&f| mesh.facet(f)));
     }
-    let _ = writeln!(s, "{d} 1 {cell_code} {}", mesh.n_cells());
-    for e in 0..mesh.n_cells() {
-        tag += 1;
-        let nodes: Vec<String> = mesh.cell(e).iter().map(|p| (p + 1).to_string()).collect();
-        let _ = writeln!(s, "{tag} {}", nodes.join(" "));
+    for (k, cells) in entities.values().enumerate() {
+        let header = format!("{d} {} {cell_code} {}", k + 1, cells.len());
+        write_elements(&mut s, header, &mut cells.iter().map(|&e| mesh.cell(e)));
     }
     let _ = writeln!(s, "$EndElements");
     s

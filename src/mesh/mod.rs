@@ -1,14 +1,25 @@
-//! Simplicial meshes with named boundary parts.
+//! Simplicial meshes with named boundary parts and named cell regions.
 //!
 //! A [`Mesh`] is a conforming triangulation (d = 2) or tetrahedralization (d = 3) of Ω̄. Its
 //! boundary facets (edges in 2D, triangles in 3D) carry the index of a named part (`left`,
-//! `bottom`, …); a scenario maps parts to Γ_D, Γ_N and Γ_C (and to symmetry planes).
+//! `bottom`, …); a scenario maps parts to Γ_D, Γ_N and Γ_C (and to symmetry planes). Its cells
+//! may belong to named **cell regions** ([`CellRegion`]: a Gmsh physical group of dimension d,
+//! e.g. a pad's `lining` and `backplate`), which a problem gives their own materials.
+//!
+//! **Why regions are lists of cells.** A region holds the sorted indices of its cells as `u32`:
+//! 4 bytes per cell that is in a region, nothing for a mesh without regions (the generators'),
+//! against 24–32 bytes per cell for the connectivity itself. Lists, rather than one region index
+//! per cell, keep what the file says when a cell is in two physical groups (Gmsh allows it; a
+//! problem that gives both groups a material refuses it, naming the cell) and need no marker
+//! for a cell in no region. The problem turns the regions it uses into one small material
+//! index per cell (`material::CellMaterials`).
 //!
 //! Generators: [`rectangle`] (triangles, parts `left`, `right`, `bottom`, `top`), [`cuboid`]
 //! (tetrahedra, 6 per hexahedral cell by the Kuhn split, parts `x-`, `x+`, `y-`, `y+`, `z-`,
 //! `z+`) and [`annulus`] (triangles, parts `inner`, `outer`), each with a `try_` variant that
 //! returns what [`Mesh::new`] finds wrong (too elongated cells) as an error instead of panicking. Files: [`read_msh`] reads Gmsh
-//! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts, and
+//! meshes (MSH 4.1 ASCII and binary, MSH 2.2 ASCII) with their physical groups as parts (dimension
+//! d − 1) and cell regions (dimension d), and
 //! [`msh_text`] writes one. Every mesh goes through the checks of [`Mesh::new`]. [`chains`]
 //! orders 2D boundary curves (the outline, Γ_C) by arc length for figures.
 //!
@@ -48,6 +59,17 @@ pub struct Mesh {
     pub facet_parts: Vec<usize>,
     /// Names of the boundary parts, indexed by part.
     pub part_names: Vec<String>,
+    /// The named cell regions (none for the generators' meshes); set by [`Mesh::with_regions`].
+    pub regions: Vec<CellRegion>,
+}
+
+/// A named set of cells: a Gmsh physical group of dimension d.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CellRegion {
+    /// The group's name (its tag as a decimal string when the file names it not).
+    pub name: String,
+    /// Its cells, ascending, each once.
+    pub cells: Vec<u32>,
 }
 
 impl Mesh {
@@ -85,6 +107,45 @@ impl Mesh {
     /// Index of the boundary part called `name`.
     pub fn part_index(&self, name: &str) -> Option<usize> {
         self.part_names.iter().position(|p| p == name)
+    }
+
+    /// Index of the cell region called `name`.
+    pub fn region_index(&self, name: &str) -> Option<usize> {
+        self.regions.iter().position(|r| r.name == name)
+    }
+
+    /// The names of the cell regions.
+    pub fn region_names(&self) -> Vec<String> {
+        self.regions.iter().map(|r| r.name.clone()).collect()
+    }
+
+    /// The mesh with the cell regions `regions` (replacing any it had): each region's cells are
+    /// sorted and repeats dropped; a cell index out of range, a name given twice or a mesh of
+    /// more than 2³² cells is an error.
+    pub fn with_regions(mut self, mut regions: Vec<CellRegion>) -> Result<Mesh, MeshError> {
+        let n_cells = self.n_cells();
+        if !regions.is_empty() && u32::try_from(n_cells).is_err() {
+            return Err(MeshError::Invalid(format!(
+                "{n_cells} cells: cell regions index at most 2³² cells"
+            )));
+        }
+        for (k, name) in regions.iter().map(|r| &r.name).enumerate() {
+            if regions[..k].iter().any(|r| &r.name == name) {
+                return Err(MeshError::Invalid(format!("the region name `{name}` appears twice")));
+            }
+        }
+        for region in &mut regions {
+            region.cells.sort_unstable();
+            region.cells.dedup();
+            if let Some(&e) = region.cells.last().filter(|&&e| e as usize >= n_cells) {
+                return Err(MeshError::Invalid(format!(
+                    "cell {e} of region `{}` out of range ({n_cells} cells)",
+                    region.name
+                )));
+            }
+        }
+        self.regions = regions;
+        Ok(self)
     }
 
     /// Facets belonging to any of the given parts.

@@ -104,6 +104,22 @@ pub enum ModelError {
         t: f64,
         value: f64,
     },
+    /// A cell region (given a material) the mesh does not have.
+    #[error("the mesh has no cell region `{name}`; its cell regions are {known:?}")]
+    UnknownRegion { name: String, known: Vec<String> },
+    /// A cell in two regions given materials: which material it takes would be arbitrary.
+    #[error(
+        "cell {cell} (centre {centre:?}) is in both cell regions `{first}` and `{second}`, which are given materials: give a cell one material (in Gmsh, put it in one physical group)"
+    )]
+    CellInTwoRegions {
+        cell: usize,
+        centre: [f64; 3],
+        first: String,
+        second: String,
+    },
+    /// More regions given materials than the per-cell index holds.
+    #[error("{count} cell regions are given materials: at most 65 534")]
+    TooManyRegions { count: usize },
     /// A mesh that is not valid.
     #[error(transparent)]
     Mesh(#[from] crate::mesh::MeshError),

@@ -46,7 +46,7 @@ use crate::contact::{
 use crate::fem::assembly::{self, Matrices};
 use crate::fem::dofs::{NodeBasis, TemperatureSpace, VelocitySpace};
 use crate::loads::{nodal_values, Datum, Load, LoadKind};
-use crate::material::Material;
+use crate::material::{CellMaterials, Material};
 use crate::mesh::Mesh;
 
 /// The time grid t_n = n k, n = 0 … N, k = T/N.
@@ -138,7 +138,11 @@ pub struct Problem {
     pub mesh: Mesh,
     /// The mesh parts of each boundary role.
     pub parts: BoundaryParts,
+    /// The body's material: that of every cell in no region given one
+    /// ([`ProblemBuilder::region`]), of every cell when none is.
     pub material: Material,
+    /// The material of each cell (one, the body's, without regions).
+    pub materials: CellMaterials,
     /// The time grid.
     pub time: TimeGrid,
     /// E^h.
@@ -204,6 +208,8 @@ pub trait ExtraLoads: Send + Sync + std::fmt::Debug {
 pub struct ProblemBuilder {
     mesh: Mesh,
     material: Material,
+    /// (cell region, its material), in the order given.
+    regions: Vec<(String, Material)>,
     time: TimeGrid,
     dirichlet: Vec<String>,
     neumann: Vec<String>,
@@ -244,6 +250,7 @@ impl ProblemBuilder {
         ProblemBuilder {
             mesh,
             material,
+            regions: Vec::new(),
             time,
             dirichlet: Vec::new(),
             neumann: Vec::new(),
@@ -269,6 +276,16 @@ impl ProblemBuilder {
             initial_fields: None,
             extra_loads: None,
         }
+    }
+
+    /// The cells of the mesh's cell region `name` (a Gmsh physical group of dimension d) take
+    /// `material`; cells in no region given a material keep the builder's. A region given again
+    /// takes the later material. A region the mesh lacks, or a cell in two regions given
+    /// materials, is an error of [`ProblemBuilder::build`].
+    pub fn region(mut self, name: &str, material: Material) -> Self {
+        self.regions.retain(|(given, _)| given != name);
+        self.regions.push((name.to_string(), material));
+        self
     }
 
     /// Γ_D: the clamped parts (may be empty: in dynamics the mass term keeps the step matrix
@@ -503,6 +520,7 @@ impl ProblemBuilder {
             }
         }
         let material = self.material;
+        let materials = cell_materials(&mesh, material, &self.regions)?;
 
         // Constraints per node; Dirichlet wins at corners.
         let clamped = mesh.nodes_on(&parts.dirichlet);
@@ -531,7 +549,7 @@ impl ProblemBuilder {
         let temperature = TemperatureSpace::new(&thermal.fixed);
 
         let (k_e, theta_r) = self.exchange.robin().unwrap_or((0.0, 0.0));
-        let mut matrices = assembly::assemble_matrices(&mesh, &material, &parts.contact, k_e);
+        let mut matrices = assembly::assemble_cell_materials(&mesh, &materials, &parts.contact, k_e);
         thermal.boundary.add_convection(&mesh, &mut matrices.conduction);
         let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
         let contact: Vec<ContactNode> = frames
@@ -587,13 +605,20 @@ impl ProblemBuilder {
         if let Some(boundary_load) = &thermal.constant_load {
             exchange_load.iter_mut().zip(boundary_load).for_each(|(e, b)| *e += b);
         }
-        let mut reference_load = vec![0.0; mesh.n_nodes() * d];
-        let theta_ref = material.reference_temperature;
-        if theta_ref != 0.0 {
-            matrices
-                .coupling
-                .mul_add(theta_ref, &vec![1.0; mesh.n_nodes()], &mut reference_load);
-        }
+        let reference_load = match materials.uniform_material() {
+            // One material: G carries its c, and θ_ref G 1 is one product (the bits of before).
+            Some(uniform) => {
+                let mut load = vec![0.0; mesh.n_nodes() * d];
+                let theta_ref = uniform.reference_temperature;
+                if theta_ref != 0.0 {
+                    matrices
+                        .coupling
+                        .mul_add(theta_ref, &vec![1.0; mesh.n_nodes()], &mut load);
+                }
+                load
+            }
+            None => assembly::reference_load(&mesh, &materials),
+        };
 
         let initial = match self.initial_fields {
             None => {
@@ -630,6 +655,7 @@ impl ProblemBuilder {
             mesh,
             parts,
             material,
+            materials,
             time: self.time,
             velocity,
             temperature,
@@ -842,6 +868,43 @@ fn friction_of_nodes(
         .map(|node| node_law[node.node].or(catch_all).expect("every contact part has a law"))
         .collect();
     Ok((laws, of_node))
+}
+
+/// The material of each cell: the builder's, and each given region's on its cells. A region
+/// the mesh lacks, or a cell in two of the given regions, is an error naming them.
+fn cell_materials(mesh: &Mesh, base: Material, regions: &[(String, Material)]) -> Result<CellMaterials, Error> {
+    if regions.is_empty() {
+        return Ok(CellMaterials::uniform(base));
+    }
+    if regions.len() >= usize::from(u16::MAX) {
+        return Err(Error::TooManyRegions { count: regions.len() });
+    }
+    let mut of_cell = vec![0u16; mesh.n_cells()];
+    let mut materials = vec![base];
+    for (name, material) in regions {
+        let index = mesh.region_index(name).ok_or_else(|| Error::UnknownRegion {
+            name: name.clone(),
+            known: mesh.region_names(),
+        })?;
+        let k = materials.len() as u16;
+        for &e in &mesh.regions[index].cells {
+            let slot = &mut of_cell[e as usize];
+            if *slot != 0 {
+                let cell = e as usize;
+                let vertices = mesh.cell_coords(cell);
+                let n = vertices.len() as f64;
+                return Err(Error::CellInTwoRegions {
+                    cell,
+                    centre: [0, 1, 2].map(|c| vertices.iter().map(|x| x[c]).sum::<f64>() / n),
+                    first: regions[usize::from(*slot) - 1].0.clone(),
+                    second: name.clone(),
+                });
+            }
+            *slot = k;
+        }
+        materials.push(*material);
+    }
+    Ok(CellMaterials { materials, of_cell })
 }
 
 fn strings(names: &[&str]) -> Vec<String> {

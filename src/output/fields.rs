@@ -1,5 +1,6 @@
-//! Derived fields for output: the stress σ = 𝒜ε(w) + ℬε(u) + C(θ − θ_ref) per cell (eq. (1)),
-//! its von Mises norm, and the contact status and friction stress per node.
+//! Derived fields for output: the stress σ = 𝒜ε(w) + ℬε(u) + C(θ − θ_ref) per cell (eq. (1),
+//! with the cell's material), its von Mises norm, and the contact status and friction stress per
+//! node.
 
 use crate::mesh::simplex::Simplex;
 use crate::model::ContactRow;
@@ -20,9 +21,9 @@ pub const STRESS_COMPONENTS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 
 pub fn cell_stress(problem: &Problem, state: &State) -> Vec<f64> {
     let mesh = &problem.mesh;
     let d = mesh.dim;
-    let material = &problem.material;
     let mut out = Vec::with_capacity(mesh.n_cells() * STRESS_COMPONENTS.len());
     for e in 0..mesh.n_cells() {
+        let material = problem.materials.of(e);
         let t = Simplex::new(d, &mesh.cell_coords(e));
         let nodes = mesh.cell(e);
         // A full 3 × 3 strain with zero z rows in 2D (plane strain).

@@ -476,18 +476,9 @@ impl Scenario {
         steps
     }
 
-    /// The material of the scenario.
+    /// The material of the scenario (`[material]`: of the cells in no `[[regions]]`).
     pub fn material(&self) -> Material {
-        let m = &self.material;
-        Material {
-            density: m.density,
-            heat_capacity: m.heat_capacity,
-            viscosity: Isotropic::viscosity(m.viscosity_mu1, m.viscosity_mu2),
-            elasticity: Isotropic::elasticity(m.young, m.poisson),
-            expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
-            conductivity: m.conductivity,
-            reference_temperature: m.reference_temperature,
-        }
+        material_of(&self.material)
     }
 
     /// The scenario's problem, ready for a builder's last touches (extra loads).
@@ -527,6 +518,9 @@ impl Scenario {
         );
         if let Some(fields) = initial {
             builder = builder.initial_fields(fields, "initial.from");
+        }
+        for region in &self.regions {
+            builder = builder.region(&region.part, material_of(&region.material(&self.material)));
         }
         for (key, spec) in self.friction_keys() {
             builder = match friction_law(&key, spec)? {
@@ -583,8 +577,22 @@ impl Scenario {
             ModelError::CurvedSymmetryPart { part } => {
                 invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)")
             }
+            e @ ModelError::CellInTwoRegions { .. } => self.region_error(e),
             other => other.into(),
         })
+    }
+
+    /// A cell in two regions given materials, named by the later region's key.
+    fn region_error(&self, e: ModelError) -> Error {
+        let ModelError::CellInTwoRegions { second, .. } = &e else {
+            return e.into();
+        };
+        let i = self.regions.iter().position(|r| &r.part == second).unwrap_or(0);
+        invalid(
+            &format!("regions[{i}].part"),
+            second,
+            &format!("regions that share no cell: {e}"),
+        )
     }
 
     /// The problem of a run continued from its own checkpoint (`--restart`): [`Scenario::build`]
@@ -691,6 +699,19 @@ fn differing(before: &Table, after: &Table, prefix: &str, keys: &mut Vec<String>
             (b, a) if b != a => keys.push(format!("{key}: {} → {}", show(b), show(a))),
             _ => {}
         }
+    }
+}
+
+/// The material of a `[material]` table (or of a region's, completed by `[material]`).
+fn material_of(m: &super::MaterialSpec) -> Material {
+    Material {
+        density: m.density,
+        heat_capacity: m.heat_capacity,
+        viscosity: Isotropic::viscosity(m.viscosity_mu1, m.viscosity_mu2),
+        elasticity: Isotropic::elasticity(m.young, m.poisson),
+        expansion: Material::expansion_from(m.thermal_expansion, m.young, m.poisson),
+        conductivity: m.conductivity,
+        reference_temperature: m.reference_temperature,
     }
 }
 

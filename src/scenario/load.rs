@@ -148,8 +148,23 @@ impl Scenario {
             let mesh = mesh::read_msh(file).map_err(Error::Mesh)?;
             scenario.loaded = LoadedMesh(Some(Arc::new(mesh)));
         }
+        scenario.warn_merged_regions();
         scenario.validate()?;
         Ok(scenario)
+    }
+
+    /// A mesh with several cell regions and no `[[regions]]`: every cell takes `[material]`,
+    /// which may not be what the regions were drawn for (a warning, once).
+    fn warn_merged_regions(&mut self) {
+        let Some(mesh) = &self.loaded.0 else { return };
+        if mesh.regions.len() > 1 && self.regions.is_empty() {
+            self.warnings.push(format!(
+                "the mesh has {} cell regions {:?} and no [[regions]] is given: every cell takes [material] \
+                 (give a region its own material with a [[regions]] table, part = \"…\")",
+                mesh.regions.len(),
+                mesh.region_names()
+            ));
+        }
     }
 
     /// Renames `law = "slip-weakening"` (the former name of the paper's velocity-weakening law)
@@ -368,6 +383,7 @@ const OPTIONAL_KEYS: &[&str] = &[
     "frictional_heating.value",
     "frictional_heating.friction_power",
     "thermal",
+    "regions",
 ];
 
 /// Data keys: a number, an array, a `{ constant, rate }` table or expression strings may replace
@@ -420,6 +436,11 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
                 "no geometry beside mesh.file (the mesh file gives the geometry)",
             ));
         }
+        if path == "regions" {
+            let checked = regions(base, value)?;
+            base.insert(key, checked);
+            continue;
+        }
         if !base.contains_key(&key) && OPTIONAL_KEYS.contains(&path.as_str()) {
             base.insert(key, value);
             continue;
@@ -453,6 +474,45 @@ fn overlay(base: &mut Table, user: Table, prefix: &str) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// `[[regions]]` as given (it replaces any before): an array of tables, each with `part` (a
+/// string) and keys of `[material]` (numbers; integers become floats), checked here so that an
+/// error names the entry, `regions[1].densty`.
+fn regions(base: &Table, value: Value) -> Result<Value, Error> {
+    let form = "an array of tables ([[regions]]), each with part = \"…\" and keys of [material]";
+    let Value::Array(items) = value else {
+        return Err(invalid("regions", &value.to_string(), form));
+    };
+    let mut allowed = base
+        .get("material")
+        .and_then(Value::as_table)
+        .cloned()
+        .unwrap_or_default();
+    allowed.insert("part".into(), Value::String(String::new()));
+    let mut checked = Vec::with_capacity(items.len());
+    for (i, item) in items.into_iter().enumerate() {
+        let entry = format!("regions[{i}]");
+        let Value::Table(table) = item else {
+            return Err(invalid(&entry, &item.to_string(), form));
+        };
+        if !table.contains_key("part") {
+            return Err(Error::MissingKey {
+                key: format!("{entry}.part"),
+            });
+        }
+        let mut out = Table::new();
+        for (key, value) in table {
+            let path = format!("{entry}.{key}");
+            let Some(slot) = allowed.get(&key) else {
+                return Err(unknown_key(&allowed, &key, path));
+            };
+            check_type(&path, slot, &value)?;
+            out.insert(key, coerce(slot, value));
+        }
+        checked.push(Value::Table(out));
+    }
+    Ok(Value::Array(checked))
 }
 
 /// A user table that sets `mesh.file` replaces the generator: the base's geometry, cell counts

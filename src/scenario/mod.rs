@@ -28,8 +28,8 @@ pub use build::differing_keys;
 pub use load::{DEFAULT_TOML, MAX_SCENARIO_BYTES};
 pub use schema::{
     Affine, BoundarySpec, DatumSpec, FoundationSpec, FrictionSpec, FrictionSpecs, FrictionalHeatingSpec, Geometry,
-    HeatExchangeSpec, InitialSpec, Loads, MaterialSpec, MeshSpec, NormalSpec, OutputSpec, Pressure, Scenario,
-    SolverSpec, Structured, ThermalSpec, TimeSpec, Traction, THERMAL_CONDITIONS,
+    HeatExchangeSpec, InitialSpec, Loads, MaterialSpec, MeshSpec, NormalSpec, OutputSpec, Pressure, RegionSpec,
+    Scenario, SolverSpec, Structured, ThermalSpec, TimeSpec, Traction, THERMAL_CONDITIONS,
 };
 pub use validate::{
     keys_behind, LENGTH_RANGE, MAX_CELL_ASPECT, MAX_CUTBACK_DEPTH, MAX_MAGNITUDE, MAX_OUTPUT_TIMES, MAX_STEPS,

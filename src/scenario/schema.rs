@@ -22,6 +22,9 @@ pub struct Scenario {
     pub time: TimeSpec,
     pub boundary: BoundarySpec,
     pub material: MaterialSpec,
+    /// Cell regions with their own material (`[[regions]]`); cells in none take `[material]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionSpec>,
     pub initial: InitialSpec,
     pub loads: Loads,
     pub friction: FrictionSpecs,
@@ -131,6 +134,50 @@ pub struct MaterialSpec {
     pub thermal_expansion: f64,
     pub conductivity: f64,
     pub reference_temperature: f64,
+}
+
+/// A cell region's material (`[[regions]]`): a Gmsh physical group of cells of the mesh
+/// (`part`) and any key of `[material]`; the keys not given are `[material]`'s.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// The cell region's name (the physical group's).
+    pub part: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heat_capacity: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viscosity_mu1: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viscosity_mu2: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub young: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub poisson: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermal_expansion: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conductivity: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_temperature: Option<f64>,
+}
+
+impl RegionSpec {
+    /// The region's material: its keys, the others `base`'s.
+    pub fn material(&self, base: &MaterialSpec) -> MaterialSpec {
+        MaterialSpec {
+            density: self.density.unwrap_or(base.density),
+            heat_capacity: self.heat_capacity.unwrap_or(base.heat_capacity),
+            viscosity_mu1: self.viscosity_mu1.unwrap_or(base.viscosity_mu1),
+            viscosity_mu2: self.viscosity_mu2.unwrap_or(base.viscosity_mu2),
+            young: self.young.unwrap_or(base.young),
+            poisson: self.poisson.unwrap_or(base.poisson),
+            thermal_expansion: self.thermal_expansion.unwrap_or(base.thermal_expansion),
+            conductivity: self.conductivity.unwrap_or(base.conductivity),
+            reference_temperature: self.reference_temperature.unwrap_or(base.reference_temperature),
+        }
+    }
 }
 
 /// The initial data (10), each a datum at t = 0 (numbers or expressions of x, y, z).

@@ -31,6 +31,29 @@ pub const MAX_OUTPUT_TIMES: usize = 100_000;
 /// The most time steps a run may have (its per-step records stay in memory: ~100 bytes each).
 pub const MAX_STEPS: usize = 1_000_000;
 
+/// The constants of a material against their ranges, each error naming `{table}.{key}`.
+fn material_in_range(m: &super::MaterialSpec, d: usize, table: &str) -> Result<(), Error> {
+    let key = |name: &str| format!("{table}.{name}");
+    positive(&key("density"), m.density)?;
+    positive(&key("heat_capacity"), m.heat_capacity)?;
+    positive(&key("viscosity_mu2"), m.viscosity_mu2)?;
+    if !m.viscosity_mu1.is_finite() || m.viscosity_mu1 * d as f64 + m.viscosity_mu2 <= 0.0 {
+        return Err(invalid(
+            &key("viscosity_mu1"),
+            &m.viscosity_mu1,
+            "d·μ₁ + μ₂ > 0 (𝒜 coercive)",
+        ));
+    }
+    positive(&key("young"), m.young)?;
+    if !(m.poisson > -1.0 && m.poisson < 0.5) {
+        return Err(invalid(&key("poisson"), &m.poisson, "a Poisson ratio in (−1, 0.5)"));
+    }
+    finite(&key("thermal_expansion"), m.thermal_expansion)?;
+    finite(&key("reference_temperature"), m.reference_temperature)?;
+    positive(&key("conductivity"), m.conductivity)?;
+    Ok(())
+}
+
 impl Scenario {
     /// The names of the mesh's boundary parts.
     fn part_names(&self) -> Vec<String> {
@@ -96,26 +119,31 @@ impl Scenario {
         Ok(())
     }
 
-    /// The material constants.
+    /// The material constants, `[material]`'s and each region's (its own keys and those it
+    /// inherits, named by the region's key), and the regions' parts: cell regions of the mesh,
+    /// each given once.
     fn validate_material(&self, d: usize) -> Result<(), Error> {
-        let m = &self.material;
-        positive("material.density", m.density)?;
-        positive("material.heat_capacity", m.heat_capacity)?;
-        positive("material.viscosity_mu2", m.viscosity_mu2)?;
-        if !m.viscosity_mu1.is_finite() || m.viscosity_mu1 * d as f64 + m.viscosity_mu2 <= 0.0 {
-            return Err(invalid(
-                "material.viscosity_mu1",
-                &m.viscosity_mu1,
-                "d·μ₁ + μ₂ > 0 (𝒜 coercive)",
-            ));
+        material_in_range(&self.material, d, "material")?;
+        let known = self.loaded.0.as_ref().map(|m| m.region_names()).unwrap_or_default();
+        for (i, region) in self.regions.iter().enumerate() {
+            let key = format!("regions[{i}]");
+            if !known.contains(&region.part) {
+                let expected = if known.is_empty() {
+                    "a cell region of the mesh, but it has none (regions are the physical groups of dimension d of a mesh.file)".to_string()
+                } else {
+                    format!("a cell region of the mesh, among {known:?}")
+                };
+                return Err(invalid(&format!("{key}.part"), &region.part, &expected));
+            }
+            if self.regions[..i].iter().any(|r| r.part == region.part) {
+                return Err(invalid(
+                    &format!("{key}.part"),
+                    &region.part,
+                    "each region in one [[regions]] table",
+                ));
+            }
+            material_in_range(&region.material(&self.material), d, &key)?;
         }
-        positive("material.young", m.young)?;
-        if !(m.poisson > -1.0 && m.poisson < 0.5) {
-            return Err(invalid("material.poisson", &m.poisson, "a Poisson ratio in (−1, 0.5)"));
-        }
-        finite("material.thermal_expansion", m.thermal_expansion)?;
-        finite("material.reference_temperature", m.reference_temperature)?;
-        positive("material.conductivity", m.conductivity)?;
         Ok(())
     }
 
@@ -473,8 +501,8 @@ fn at_least_one(key: &str, v: usize) -> Result<(), Error> {
 /// The keys behind the step matrix, named for an error of its linear algebra.
 const STEP_MATRIX_KEYS: &str = "It is built from material.density, material.young, material.poisson, \
      material.viscosity_mu1, material.viscosity_mu2, material.conductivity, material.heat_capacity, \
-     material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps (k): check their \
-     magnitudes";
+     material.thermal_expansion (and these keys of [[regions]]), heat_exchange.coefficient, the mesh's cell sizes \
+     and time.steps (k): check their magnitudes";
 
 /// The keys of a step's data (its right-hand side and contact terms), named first for a
 /// non-finite solve: the scenario's numbers are bounded (magnitudes ≤ 10¹⁸) where expressions
@@ -509,8 +537,8 @@ mod tests {
     fn keys_behind_names_the_keys_of_a_failed_step_matrix() {
         let expected = "It is built from material.density, material.young, material.poisson, material.viscosity_mu1, \
                         material.viscosity_mu2, material.conductivity, material.heat_capacity, \
-                        material.thermal_expansion, heat_exchange.coefficient, the mesh's cell sizes and time.steps \
-                        (k): check their magnitudes";
+                        material.thermal_expansion (and these keys of [[regions]]), heat_exchange.coefficient, \
+                        the mesh's cell sizes and time.steps (k): check their magnitudes";
         let factorization = Error::Step(StepError::La(LaError::Factorization {
             stage: FactorStage::Numeric,
             detail: "zero pivot".into(),

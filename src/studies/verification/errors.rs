@@ -37,7 +37,9 @@ pub struct LevelErrors {
 }
 
 /// Errors between two discrete states on the same mesh (the coarse one already prolonged):
-/// exact norms of P1 fields through the Gram matrices of `problem`.
+/// exact norms of P1 fields through the Gram matrices of `problem`. The L² norms divide ℳ and
+/// ℳ_θ by the body's ρ and ρ c_p: exact for a body of one material (the verification family's);
+/// with cell regions of other densities they are weighted by ρ_cell/ρ.
 pub fn discrete_errors(problem: &Problem, u: &[f64], w: &[f64], theta: &[f64], reference: &State) -> LevelErrors {
     let m = &problem.matrices;
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
