@@ -9,11 +9,15 @@
 //! - [`norms`]: the norms of the stop criteria (77)–(80);
 //! - [`ContactLaws`]: the laws on Γ_C node by node at one step ([`Friction`], [`Heating`]);
 //! - [`ContactRow`]: the state at a node of Γ_C, as output reads it;
+//! - [`energy`]: the energies of a step and their balances ([`StepEnergy`]);
+//! - [`plausibility`]: the rigid motions nothing holds, the plausible temperatures;
 //! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
 
 mod contact_rows;
+pub mod energy;
 mod error;
 mod laws;
+pub mod plausibility;
 pub mod norms;
 mod problem;
 pub mod samples;
@@ -21,6 +25,7 @@ mod state;
 mod step_matrix;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
+pub use energy::{step_energy, StepEnergy};
 pub use error::ModelError;
 pub use laws::{ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
 pub use problem::*;

@@ -284,6 +284,8 @@ pub struct StepInfo {
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange (0 where ∂j is affine).
     pub exchange_iterations: usize,
+    /// The step's energies ([`crate::model::energy`]), substeps summed; set by the time loop.
+    pub energy: crate::model::StepEnergy,
 }
 
 impl StepInfo {
@@ -299,6 +301,7 @@ impl StepInfo {
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;
         self.exchange_iterations += other.exchange_iterations;
+        self.energy.absorb(&other.energy);
     }
 }
 
