@@ -72,7 +72,7 @@ pub use summary::{
     AmgRecord, CutbackRecord, EnergySummary, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally,
     Timings, Uniqueness,
 };
-pub use watch::{RunWarning, BALANCE_TOLERANCE};
+pub use watch::{RunWarning, BALANCE_TOLERANCE, HEAT_BALANCE_TOLERANCE};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]

@@ -176,8 +176,9 @@ pub struct EnergySummary {
     /// The largest relative residual of a step's mechanical and heat balance.
     pub max_energy_residual: f64,
     pub max_heat_residual: f64,
-    /// Above this, a step's residual is a warning.
+    /// Above these, a step's residual is a warning.
     pub tolerance: f64,
+    pub heat_tolerance: f64,
 }
 
 impl EnergySummary {
@@ -194,6 +195,7 @@ impl EnergySummary {
             max_energy_residual: worst(|s| s.energy_residual),
             max_heat_residual: worst(|s| s.heat_residual),
             tolerance: super::watch::BALANCE_TOLERANCE,
+            heat_tolerance: super::watch::HEAT_BALANCE_TOLERANCE,
         })
     }
 }

@@ -15,10 +15,15 @@ use super::summary::StepRecord;
 use crate::model::plausibility::{RigidModes, TemperatureRange, RIGID_DISPLACEMENT_LIMIT};
 use crate::model::{Problem, State};
 
-/// A step's balance residual above this fraction of the balance's largest term is a warning:
-/// the direct path closes to about 1e-15, the iterative one to the order of its Krylov
-/// tolerance (1e-10 relative: about 1e-9 here).
+/// A step's mechanical balance residual above this fraction of the balance's largest term is a
+/// warning: the direct path closes to about 1e-15, the iterative one to the order of its
+/// Krylov tolerance (1e-10 relative: 3e-10 on the paper's example).
 pub const BALANCE_TOLERANCE: f64 = 1e-6;
+
+/// The same for the heat balance, looser: a nonlinear heat exchange's fixed point stops where ζ
+/// changes by ε_conv = 1e-6 relative, so its heat is that exact (6e-7 of the largest heat on
+/// `scenarios/own_laws.toml`); affine exchanges close to 1e-13 (direct) and 5e-9 (iterative).
+pub const HEAT_BALANCE_TOLERANCE: f64 = 1e-4;
 
 /// A warning of the run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -72,13 +77,16 @@ impl Watch {
                 });
             }
         };
-        for (kind, value) in [("energy_balance", step.energy_residual), ("heat_balance", step.heat_residual)] {
-            if value > BALANCE_TOLERANCE {
+        let balances = [
+            ("energy_balance", "mechanical energy", step.energy_residual, BALANCE_TOLERANCE),
+            ("heat_balance", "heat", step.heat_residual, HEAT_BALANCE_TOLERANCE),
+        ];
+        for (kind, name, value, tolerance) in balances {
+            if value > tolerance {
                 raise(
                     kind,
                     format!(
-                        "the {} balance's residual is {value:.3e} of its largest term (tolerance {BALANCE_TOLERANCE:e}): the step's equations were not solved that well",
-                        if kind == "energy_balance" { "mechanical energy" } else { "heat" }
+                        "the {name} balance's residual is {value:.3e} of its largest term (tolerance {tolerance:e}): the step's equations were not solved that well"
                     ),
                 );
             }
