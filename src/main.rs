@@ -951,13 +951,19 @@ fn print_summary(s: &Summary) {
 fn print_energy(e: &driver::EnergySummary) {
     let t = &e.total;
     println!();
+    println!("{:<34} {:>12} {:>12}", "energy [J] (2D: per metre)", "t = 0", "t = T");
     println!(
-        "{:<34} {:>12} {:>12}",
-        "energy [J] (2D: per metre)", "t = 0", "t = T"
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  kinetic K", e.initial_kinetic, t.kinetic
     );
-    println!("{:<34} {:>12.4e} {:>12.4e}", "  kinetic K", e.initial_kinetic, t.kinetic);
-    println!("{:<34} {:>12.4e} {:>12.4e}", "  elastic E", e.initial_elastic, t.elastic);
-    println!("{:<34} {:>12.4e} {:>12.4e}", "  thermal H = ∫ρc_pθ", e.initial_thermal, t.thermal);
+    println!(
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  elastic E", e.initial_elastic, t.elastic
+    );
+    println!(
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  thermal H = ∫ρc_pθ", e.initial_thermal, t.thermal
+    );
     for (label, value) in [
         ("  dissipated: viscous", t.viscous),
         ("  dissipated: numerical (Euler)", t.numerical),

@@ -25,7 +25,11 @@ fn energies(problem: &Problem, params: &SolverParams) -> Vec<StepEnergy> {
             (e.thermal, e.thermal_change, before.2, now.2),
         ] {
             let scale = was.abs().max(is.abs()).max(1e-300);
-            assert!((level - is).abs() <= 1e-12 * scale, "step {}: level {level} against {is}", state.n);
+            assert!(
+                (level - is).abs() <= 1e-12 * scale,
+                "step {}: level {level} against {is}",
+                state.n
+            );
             assert!(
                 (change - (is - was)).abs() <= 1e-10 * scale,
                 "step {}: change {change} against {}",
@@ -70,7 +74,10 @@ fn paper_balance_closes_at_every_step_on_both_linear_paths() {
                 n + 1
             );
             assert!(e.viscous > 0.0 && e.numerical > 0.0 && e.frictional >= 0.0, "{e:?}");
-            assert!(e.loads != 0.0 && e.thermal_stress != 0.0 && e.heat_exchange < 0.0, "{e:?}");
+            assert!(
+                e.loads != 0.0 && e.thermal_stress != 0.0 && e.heat_exchange < 0.0,
+                "{e:?}"
+            );
             assert_eq!(e.foundation, 0.0);
         }
         // The friction dissipates once the contact slips, and heats the body.
@@ -113,7 +120,10 @@ fn free_body_accounts_for_its_initial_kinetic_energy() {
     }
     // Both dissipations took a real share (the test sees each of them).
     let last = e.last().unwrap();
-    assert!(dissipated > 0.1 * initial.0 && last.kinetic + last.elastic > 0.01 * initial.0, "{last:?}");
+    assert!(
+        dissipated > 0.1 * initial.0 && last.kinetic + last.elastic > 0.01 * initial.0,
+        "{last:?}"
+    );
 }
 
 /// An insulated body (no Γ_D, no Γ_N, no Γ_C) with a heat source g: H grows by g |Ω| t, all of
@@ -134,7 +144,11 @@ fn insulated_body_heats_by_its_source() {
         sources += e.heat_sources;
         t += final_time / 10.0;
         let expected = initial + g * area * t;
-        assert!((e.thermal - expected).abs() <= 1e-12 * expected, "H = {} against {expected}", e.thermal);
+        assert!(
+            (e.thermal - expected).abs() <= 1e-12 * expected,
+            "H = {} against {expected}",
+            e.thermal
+        );
         assert!((sources - g * area * t).abs() <= 1e-12 * g * area * t);
         // No exchange: 1ᵀ𝒦_θθ is conduction's, zero but for rounding.
         assert!(e.heat_dirichlet == 0.0 && e.heat_friction == 0.0, "{e:?}");
@@ -154,16 +168,33 @@ fn unrestrained_pad_warns_and_the_paper_does_not() {
         .contact(&["bottom"])
         .boundary_temperature(25.0)
         .initial_temperature(Datum::scalar(25.0), "θ₀")
-        .friction(150.0, VelocityWeakening { a: 1.0, b: 0.2, alpha: 100.0 })
+        .friction(
+            150.0,
+            VelocityWeakening {
+                a: 1.0,
+                b: 0.2,
+                alpha: 100.0,
+            },
+        )
         .frictional_heating(LinearHeating::affine(0.0, 1000.0))
-        .load(LoadTarget::Pressure("top".into()), Datum::affine(vec![0.0], vec![400.0]))
-        .load(LoadTarget::Traction("left".into()), Datum::affine(vec![0.0, 0.0], vec![2000.0, 0.0]))
+        .load(
+            LoadTarget::Pressure("top".into()),
+            Datum::affine(vec![0.0], vec![400.0]),
+        )
+        .load(
+            LoadTarget::Traction("left".into()),
+            Datum::affine(vec![0.0, 0.0], vec![2000.0, 0.0]),
+        )
         .build()
         .unwrap();
     let plan = OutputPlan::default();
     let (summary, _) = driver::run_quiet(&problem, &SolverParams::default(), &plan).unwrap();
     let kinds: Vec<&str> = summary.warnings.iter().map(|w| w.kind.as_str()).collect();
-    assert!(kinds.contains(&"unrestrained") && kinds.contains(&"temperature"), "{:#?}", summary.warnings);
+    assert!(
+        kinds.contains(&"unrestrained") && kinds.contains(&"temperature"),
+        "{:#?}",
+        summary.warnings
+    );
     assert_eq!(summary.outcome, format!("completed with {} warnings", kinds.len()));
     let energy = summary.energy.unwrap();
     assert!(energy.max_energy_residual < 1e-12, "{energy:?}");

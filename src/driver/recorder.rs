@@ -4,8 +4,7 @@
 use std::time::Instant;
 
 use super::summary::{
-    AmgRecord, CutbackRecord, EnergySummary, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings,
-    Uniqueness,
+    AmgRecord, CutbackRecord, EnergySummary, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
 };
 use super::watch::{RunWarning, Watch};
 use super::OutputPlan;

@@ -78,7 +78,12 @@ impl Watch {
             }
         };
         let balances = [
-            ("energy_balance", "mechanical energy", step.energy_residual, BALANCE_TOLERANCE),
+            (
+                "energy_balance",
+                "mechanical energy",
+                step.energy_residual,
+                BALANCE_TOLERANCE,
+            ),
             ("heat_balance", "heat", step.heat_residual, HEAT_BALANCE_TOLERANCE),
         ];
         for (kind, name, value, tolerance) in balances {

@@ -184,7 +184,12 @@ pub fn energy_levels(problem: &Problem, state: &State) -> (f64, f64, f64) {
 /// tangential velocity `foundation` at t_n at the contact nodes (node-major in their tangent
 /// coordinates, d − 1 per node; zeros for a foundation at rest). Nine sparse mat-vecs with the
 /// assembled matrices, the loads at t_n, and the laws on Γ_C once.
-pub fn step_energy(problem: &Problem, previous: &State, state: &State, foundation: &[f64]) -> Result<StepEnergy, Error> {
+pub fn step_energy(
+    problem: &Problem,
+    previous: &State,
+    state: &State,
+    foundation: &[f64],
+) -> Result<StepEnergy, Error> {
     let k = state.t - previous.t;
     let mats = &problem.matrices;
     let (w, u, theta) = (&state.w, &state.u, &state.theta);
@@ -229,10 +234,19 @@ pub fn step_energy(problem: &Problem, previous: &State, state: &State, foundatio
         - e.loads
         - e.foundation;
     let previous_levels = [e.kinetic - e.kinetic_change, e.elastic - e.elastic_change];
-    e.scale = [e.kinetic, e.elastic, e.numerical, e.viscous, e.frictional, e.thermal_stress, e.loads, e.foundation]
-        .into_iter()
-        .chain(previous_levels)
-        .fold(0.0, |s, v| s.max(v.abs()));
+    e.scale = [
+        e.kinetic,
+        e.elastic,
+        e.numerical,
+        e.viscous,
+        e.frictional,
+        e.thermal_stress,
+        e.loads,
+        e.foundation,
+    ]
+    .into_iter()
+    .chain(previous_levels)
+    .fold(0.0, |s, v| s.max(v.abs()));
     heat_balance(problem, previous, state, &friction_heat, &mut e)?;
     Ok(e)
 }
@@ -258,7 +272,9 @@ fn heat_balance(
     mats.coupling.mul_transpose_add(1.0, &state.w, &mut coupling);
     let heat_mass_dtheta = mats.heat_mass.mul(&dtheta);
     let mut residual: Vec<f64> = heat_mass_dtheta.iter().map(|r| r / k).collect();
-    let rows = (residual.iter_mut()).zip(conduction.iter().zip(&coupling)).zip(sources.iter().zip(&exchange));
+    let rows = (residual.iter_mut())
+        .zip(conduction.iter().zip(&coupling))
+        .zip(sources.iter().zip(&exchange));
     for (p, ((r, (c, g)), (s, x))) in rows.enumerate() {
         *r += c - g - s - x - friction_heat[p];
     }
@@ -271,8 +287,8 @@ fn heat_balance(
     e.heat_coupling = sum(&coupling);
     let fixed = |p: usize| problem.temperature.free[p].is_none();
     e.heat_dirichlet = k * (0..theta.len()).filter(|&p| fixed(p)).map(|p| residual[p]).sum::<f64>();
-    e.heat_residual = e.thermal_change
-        - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
+    e.heat_residual =
+        e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
     e.heat_scale = [
         e.thermal_change,
         e.heat_sources,

@@ -147,8 +147,18 @@ impl TemperatureRange {
         let fixed = (problem.temperature.free.iter().zip(&problem.theta_dirichlet))
             .filter(|(free, _)| free.is_none())
             .map(|(_, &theta)| theta);
-        let foundation = problem.exchange.robin().filter(|&(k_e, _)| k_e > 0.0).map(|(_, theta_r)| theta_r);
-        let data = problem.initial.temperature.iter().copied().chain(fixed).chain(foundation);
+        let foundation = problem
+            .exchange
+            .robin()
+            .filter(|&(k_e, _)| k_e > 0.0)
+            .map(|(_, theta_r)| theta_r);
+        let data = problem
+            .initial
+            .temperature
+            .iter()
+            .copied()
+            .chain(fixed)
+            .chain(foundation);
         let (data_min, data_max) = data.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
         let span = (data_max - data_min).max(TEMPERATURE_SPAN_FLOOR);
         TemperatureRange {
@@ -189,7 +199,11 @@ fn rigid_motions(mesh: &crate::mesh::Mesh, centre: &[f64], size: f64) -> (Vec<Ve
     let mut motions = Vec::new();
     let mut names = Vec::new();
     for c in 0..d {
-        motions.push((0..mesh.n_nodes() * d).map(|i| f64::from(u8::from(i % d == c))).collect());
+        motions.push(
+            (0..mesh.n_nodes() * d)
+                .map(|i| f64::from(u8::from(i % d == c)))
+                .collect(),
+        );
         names.push(format!("translation along {}", axes[c]));
     }
     // Rotation in the plane (a, b): velocity (−(x_b − c_b), x_a − c_a) in components (a, b).
@@ -231,9 +245,14 @@ fn mode_name(coefficients: &[f64], names: &[String]) -> String {
 fn symmetric_eigen(mut a: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n = a.len();
     // v[i] is the i-th eigenvector (a row), built from the identity.
-    let mut v: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect()).collect();
+    let mut v: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect())
+        .collect();
     for _sweep in 0..100 {
-        let off: f64 = (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j))).map(|(i, j)| a[i][j].powi(2)).sum();
+        let off: f64 = (0..n)
+            .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
+            .map(|(i, j)| a[i][j].powi(2))
+            .sum();
         if off < 1e-30 {
             break;
         }
@@ -279,6 +298,9 @@ mod tests {
         assert!((v[0] + v[1]).abs() < 1e-12 && v[2].abs() < 1e-12 && (v[0].abs() - 0.5f64.sqrt()).abs() < 1e-12);
         let mut sorted = values.clone();
         sorted.sort_by(f64::total_cmp);
-        assert!((sorted[1] - 2.0).abs() < 1e-12 && (sorted[2] - 3.0).abs() < 1e-12, "{values:?}");
+        assert!(
+            (sorted[1] - 2.0).abs() < 1e-12 && (sorted[2] - 3.0).abs() < 1e-12,
+            "{values:?}"
+        );
     }
 }
