@@ -203,3 +203,52 @@ fn unrestrained_pad_warns_and_the_paper_does_not() {
     assert!(paper.warnings.is_empty(), "{:#?}", paper.warnings);
     assert_eq!(paper.outcome, "completed");
 }
+
+/// A cut-back step's figures are its substeps' summed, each substep's balance exact: the
+/// balance still closes (the starved solver of tests/cutback.rs cuts steps back).
+#[test]
+fn cut_back_steps_balance_over_their_substeps() {
+    let problem = samples::paper(16, 4, 16).unwrap();
+    let params = SolverParams {
+        max_convexification: 5,
+        max_sweeps: 0,
+        ..params(LinearKind::Direct, SolverKind::Fast)
+    };
+    let mut cut = 0;
+    time::run::<TimeError>(&problem, &params, |state, info| {
+        cut += usize::from(info.substeps > 1);
+        let e = info.energy;
+        assert!(e.relative_residual() <= 1e-12, "step {}: {e:?}", state.n);
+        // The heat residual's floor is rounding in ℳ_θ(θ_n − θ_{n−1})/k at k/2^depth.
+        assert!(e.relative_heat_residual() <= 1e-10, "step {}: {e:?}", state.n);
+        Ok(())
+    })
+    .unwrap();
+    assert!(cut > 0, "no step was cut back");
+}
+
+/// The rigid motions the constraints leave free: none for the clamped example, the tangential
+/// translation for a slab on a flat Γ_C without Γ_D, all three for a free slab.
+#[test]
+fn free_rigid_motions_are_those_the_constraints_leave() {
+    use thermocontact::model::plausibility::RigidModes;
+    assert!(RigidModes::of(&samples::paper(16, 4, 2).unwrap()).is_empty());
+    let slab = |contact: &[&str]| {
+        let mesh = thermocontact::mesh::rectangle(4.0, 1.0, 8, 2);
+        ProblemBuilder::new(mesh, uncoupled(), TimeGrid::new(1.0, 2))
+            .contact(contact)
+            .build()
+            .unwrap()
+    };
+    let on_contact = RigidModes::of(&slab(&["bottom"]));
+    assert_eq!(on_contact.names, ["translation along x"]);
+    // Its measure: a rigid shift by 0.3 along x, and nothing for a shift across Γ_C's normal.
+    let shift = |c: usize| {
+        (0..2 * 9 * 3)
+            .map(|i| if i % 2 == c { 0.3 } else { 0.0 })
+            .collect::<Vec<f64>>()
+    };
+    assert!((on_contact.rigid_displacement(&shift(0)) - 0.3).abs() < 1e-12);
+    assert!(on_contact.rigid_displacement(&shift(1)).abs() < 1e-12);
+    assert_eq!(RigidModes::of(&slab(&[])).names.len(), 3);
+}

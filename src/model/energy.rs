@@ -130,8 +130,42 @@ impl StepEnergy {
         for (a, b) in self.flows_mut().into_iter().zip(later.flows()) {
             sum(a, b);
         }
-        self.scale = self.scale.max(later.scale);
-        self.heat_scale = self.heat_scale.max(later.heat_scale);
+        // The sums' terms count too: a step's changes may exceed each substep's terms.
+        self.scale = self.scale.max(later.scale).max(self.largest_mechanical_term());
+        self.heat_scale = self.heat_scale.max(later.heat_scale).max(self.largest_heat_term());
+    }
+
+    /// The largest term of the mechanical balance in absolute value: K_n, E_n, K_{n−1},
+    /// E_{n−1} and every flow.
+    fn largest_mechanical_term(&self) -> f64 {
+        [
+            self.kinetic,
+            self.elastic,
+            self.kinetic - self.kinetic_change,
+            self.elastic - self.elastic_change,
+            self.numerical,
+            self.viscous,
+            self.frictional,
+            self.thermal_stress,
+            self.loads,
+            self.foundation,
+        ]
+        .into_iter()
+        .fold(0.0, |s, v| s.max(v.abs()))
+    }
+
+    /// The largest of |ΔH| and the heats.
+    fn largest_heat_term(&self) -> f64 {
+        [
+            self.thermal_change,
+            self.heat_sources,
+            self.heat_exchange,
+            self.heat_friction,
+            self.heat_coupling,
+            self.heat_dirichlet,
+        ]
+        .into_iter()
+        .fold(0.0, |s, v| s.max(v.abs()))
     }
 
     /// The changes, flows and residuals (every field summed over substeps), in a fixed order.
@@ -233,20 +267,7 @@ pub fn step_energy(
     e.residual = e.kinetic_change + e.elastic_change + e.numerical + e.viscous + e.frictional + e.thermal_stress
         - e.loads
         - e.foundation;
-    let previous_levels = [e.kinetic - e.kinetic_change, e.elastic - e.elastic_change];
-    e.scale = [
-        e.kinetic,
-        e.elastic,
-        e.numerical,
-        e.viscous,
-        e.frictional,
-        e.thermal_stress,
-        e.loads,
-        e.foundation,
-    ]
-    .into_iter()
-    .chain(previous_levels)
-    .fold(0.0, |s, v| s.max(v.abs()));
+    e.scale = e.largest_mechanical_term();
     heat_balance(problem, previous, state, &friction_heat, &mut e)?;
     Ok(e)
 }
@@ -289,15 +310,6 @@ fn heat_balance(
     e.heat_dirichlet = k * (0..theta.len()).filter(|&p| fixed(p)).map(|p| residual[p]).sum::<f64>();
     e.heat_residual =
         e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
-    e.heat_scale = [
-        e.thermal_change,
-        e.heat_sources,
-        e.heat_exchange,
-        e.heat_friction,
-        e.heat_coupling,
-        e.heat_dirichlet,
-    ]
-    .into_iter()
-    .fold(0.0, |s, v| s.max(v.abs()));
+    e.heat_scale = e.largest_heat_term();
     Ok(())
 }
