@@ -216,7 +216,7 @@ pub fn energy_levels(problem: &Problem, state: &State) -> (f64, f64, f64) {
 
 /// The energies of the step from `previous` to `state` (module docs), with the foundation's
 /// tangential velocity `foundation` at t_n at the contact nodes (node-major in their tangent
-/// coordinates, d − 1 per node; zeros for a foundation at rest). Nine sparse mat-vecs with the
+/// coordinates, d − 1 per node; zeros for a foundation at rest). Ten sparse mat-vecs with the
 /// assembled matrices, the loads at t_n, and the laws on Γ_C once.
 pub fn step_energy(
     problem: &Problem,
