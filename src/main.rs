@@ -517,7 +517,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 })?;
             print_summary(&summary);
             println!(
-                "results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
+                "{}; results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
+                summary.outcome,
                 out.display()
             );
             Ok(())
@@ -962,4 +963,47 @@ fn print_summary(s: &Summary) {
         );
     }
     println!("(a contact node slips when |w_τ| > {:e} m/s)", s.slip_tolerance);
+    if let Some(e) = &s.energy {
+        print_energy(e);
+    }
+}
+
+/// The energies of a run: the levels at 0 and T, what was dissipated and worked, the heats,
+/// and the worst step's balance residuals.
+fn print_energy(e: &driver::EnergySummary) {
+    let t = &e.total;
+    println!();
+    println!("{:<34} {:>12} {:>12}", "energy [J] (2D: per metre)", "t = 0", "t = T");
+    println!(
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  kinetic K", e.initial_kinetic, t.kinetic
+    );
+    println!(
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  elastic E", e.initial_elastic, t.elastic
+    );
+    println!(
+        "{:<34} {:>12.4e} {:>12.4e}",
+        "  thermal H = ∫ρc_pθ", e.initial_thermal, t.thermal
+    );
+    for (label, value) in [
+        ("  dissipated: viscous", t.viscous),
+        ("  dissipated: numerical (Euler)", t.numerical),
+        ("  dissipated: friction", t.frictional),
+        ("  work of the thermal stress", t.thermal_stress),
+        ("  work of the loads", t.loads),
+        ("  work of the foundation", t.foundation),
+        ("  heat in: sources", t.heat_sources),
+        ("  heat in: exchange on Γ_C", t.heat_exchange),
+        ("  heat in: friction", t.heat_friction),
+        ("  heat in: coupling", t.heat_coupling),
+        ("  heat in: fixed temperatures", t.heat_dirichlet),
+    ] {
+        println!("{label:<34} {:>25.4e}", value);
+    }
+    println!(
+        "{:<34} {:>25}",
+        "balance residual (worst step)",
+        format!("{:.1e} / {:.1e}", e.max_energy_residual, e.max_heat_residual)
+    );
 }

@@ -124,6 +124,14 @@ impl<'a> Levels<'a> {
             .since(self.setup_stats.get())
     }
 
+    /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]),
+    /// with the foundation's velocity at the contact nodes at t_n (zero at rest).
+    fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
+        let foundation = crate::model::foundation_tangential(self.problem, state.t)?
+            .unwrap_or_else(|| vec![0.0; state.xi.len()]);
+        Ok(crate::model::step_energy(self.problem, previous, state, &foundation)?)
+    }
+
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next
     /// level where it does not converge; `n` is the time level being computed (for errors).
     fn advance(&self, previous: &State, t: f64, depth: usize, n: usize) -> Result<(State, StepInfo), TimeError> {
@@ -133,6 +141,7 @@ impl<'a> Levels<'a> {
             Ok((state, mut info)) => {
                 info.substeps = 1;
                 info.cutback_depth = depth;
+                info.energy = self.energy(previous, &state)?;
                 Ok((state, info))
             }
             Err(SolveError::Other(error)) => Err(error.into()),

@@ -22,6 +22,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList};
 use thermocontact::driver::{self, contact_csv_header, contact_csv_rows, OutputPlan, RunOptions, StopFlag};
 use thermocontact::model::State;
+use thermocontact::model::StepEnergy;
 use thermocontact::model::{contact_rows, ContactRow};
 use thermocontact::output::fields;
 use thermocontact::step::{SolverParams, StepInfo};
@@ -151,15 +152,17 @@ impl PySimulation {
         let (sender, receiver) = std::sync::mpsc::channel();
         let receiver = Mutex::new(receiver);
         let mut interrupted: Option<PyErr> = None;
-        let (run, captured) = std::thread::scope(|scope| {
+        let (run, (captured, energies)) = std::thread::scope(|scope| {
             scope.spawn(|| {
                 let mut captured: Vec<(State, StepInfo)> = Vec::with_capacity(plan.steps.len());
+                let mut energies: Vec<(f64, StepEnergy)> = Vec::with_capacity(problem.time.steps);
                 let run = driver::run_observed(problem, &params, &plan, &options, |_, state, info| {
+                    energies.push((state.t, info.energy));
                     if plan.steps.contains(&state.n) {
                         captured.push((state.clone(), *info));
                     }
                 });
-                let _ = sender.send((run, captured));
+                let _ = sender.send((run, (captured, energies)));
             });
             loop {
                 let waited = py.detach(|| {
@@ -204,6 +207,7 @@ impl PySimulation {
             summary: summary.unbind(),
             outputs,
             last: Py::new(py, last)?,
+            energy: energy_table(py, &energies)?.into_any().unbind(),
         })
     }
 
@@ -255,6 +259,8 @@ pub struct PyStepInfo {
     /// Krylov (GMRES) iterations of the step's linear solves (iterative path; 0 on the direct
     /// path).
     krylov_iterations: usize,
+    /// The step's energies (docs/energy.md): name → value, J (2D: per metre of thickness).
+    energy: std::collections::BTreeMap<String, f64>,
 }
 
 impl From<StepInfo> for PyStepInfo {
@@ -269,6 +275,13 @@ impl From<StepInfo> for PyStepInfo {
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             krylov_iterations: info.krylov_iterations,
+            energy: match serde_json::to_value(info.energy).expect("energies serialize") {
+                serde_json::Value::Object(map) => map
+                    .into_iter()
+                    .map(|(k, v)| (k, v.as_f64().unwrap_or(f64::NAN)))
+                    .collect(),
+                _ => unreachable!("a struct serializes to an object"),
+            },
         }
     }
 }
@@ -287,6 +300,7 @@ impl PyStepInfo {
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
         d.set_item("krylov_iterations", self.krylov_iterations)?;
+        d.set_item("energy", self.energy.clone())?;
         Ok(d)
     }
 
@@ -562,12 +576,37 @@ impl PyContact {
     }
 }
 
-/// What run() returns: the states at the output times, the state at T and the summary.
+/// The energies of each step as a dict of float64 arrays over n = 1 … N: "t", and every figure
+/// of the core's StepEnergy (docs/energy.md) for the step alone (levels at t_n, the step's
+/// changes, flows and residuals; the cumulative sums are np.cumsum of them, as steps.csv has).
+fn energy_table<'py>(py: Python<'py>, energies: &[(f64, StepEnergy)]) -> PyResult<Bound<'py, PyDict>> {
+    let table = PyDict::new(py);
+    table.set_item("t", PyArray1::from_vec(py, energies.iter().map(|(t, _)| *t).collect()))?;
+    let rows: Vec<serde_json::Map<String, serde_json::Value>> = (energies.iter())
+        .map(|(_, e)| match serde_json::to_value(e).expect("energies serialize") {
+            serde_json::Value::Object(map) => map,
+            _ => unreachable!("a struct serializes to an object"),
+        })
+        .collect();
+    let names: Vec<String> = serde_json::to_value(StepEnergy::default())
+        .ok()
+        .and_then(|v| v.as_object().map(|m| m.keys().cloned().collect()))
+        .unwrap_or_default();
+    for name in names {
+        let column: Vec<f64> = rows.iter().map(|row| row[&name].as_f64().unwrap_or(f64::NAN)).collect();
+        table.set_item(name, PyArray1::from_vec(py, column))?;
+    }
+    Ok(table)
+}
+
+/// What run() returns: the states at the output times, the state at T, the summary and the
+/// energies of every step.
 #[pyclass(name = "RunResult", module = "thermocontact", frozen)]
 pub struct PyRunResult {
     summary: Py<PyAny>,
     outputs: Vec<Py<PyState>>,
     last: Py<PyState>,
+    energy: Py<PyAny>,
 }
 
 #[pymethods]
@@ -589,6 +628,15 @@ impl PyRunResult {
     #[getter]
     fn last(&self, py: Python<'_>) -> Py<PyState> {
         self.last.clone_ref(py)
+    }
+
+    /// The energies of every step n = 1 … N: a dict of float64 arrays ("t", "kinetic",
+    /// "elastic", "thermal", "viscous", "numerical", "frictional", "loads", "residual",
+    /// "heat_sources", …; docs/energy.md), each step's own figures. summary["energy"] has the
+    /// run's totals, summary["warnings"] the warnings.
+    #[getter]
+    fn energy(&self, py: Python<'_>) -> Py<PyAny> {
+        self.energy.clone_ref(py)
     }
 
     /// The output times t_n (float64 array).

@@ -106,6 +106,7 @@ class StepInfo:
     substeps: int
     cutback_depth: int
     krylov_iterations: int
+    energy: dict[str, float]
     def to_dict(self) -> dict[str, Any]: ...
 
 class Contact:
@@ -149,6 +150,8 @@ class RunResult:
     def times(self) -> _F64: ...
     @property
     def slip_counts(self) -> _I64: ...
+    @property
+    def energy(self) -> dict[str, _F64]: ...
 
 class Steps(Iterator[State]):
     def __iter__(self) -> Steps: ...

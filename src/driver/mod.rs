@@ -9,7 +9,8 @@
 //! ```text
 //! claim the folder → set up (setup: start state, time::Levels) → open the folder (scenario.toml,
 //! solution.pvd, summary.json "running") → march (time::march_from), each step seen in order by:
-//!   recorder     the steps.csv record, the tally, the cutbacks (recorder.rs)
+//!   recorder     the steps.csv record with the step's energies, the tally, the cutbacks
+//!                (recorder.rs); the warnings of a run that leaves the plausible (watch.rs)
 //!   progress     the cutback log line, the bar or a batch line (progress.rs)
 //!   frames       at output times: the figures, the frame to the writer thread, which writes it
 //!                and rewrites solution.pvd (and steps.csv, at most every 10 s) (frames.rs,
@@ -45,6 +46,7 @@ mod setup;
 mod snapshot;
 mod stop;
 mod summary;
+mod watch;
 mod writer;
 
 use std::path::{Path, PathBuf};
@@ -67,8 +69,10 @@ use stop::Stop;
 pub use snapshot::{contact_csv_header, contact_csv_rows, record};
 pub use stop::StopFlag;
 pub use summary::{
-    AmgRecord, CutbackRecord, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
+    AmgRecord, CutbackRecord, EnergySummary, FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally,
+    Timings, Uniqueness,
 };
+pub use watch::{RunWarning, BALANCE_TOLERANCE, HEAT_BALANCE_TOLERANCE};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -239,6 +243,9 @@ fn march(
     let marched = time::march_from(problem, levels, first, |state, info| {
         observer(problem, state, info);
         let step = o.recorder.step(state, info);
+        for warning in o.recorder.watch(state, &step) {
+            o.progress.log(format!("warning: {}", warning.message));
+        }
         o.progress.step(&step);
         let output = o.frames.step(state, &mut o.recorder.tally, &o.progress)?;
         o.checkpoints.step(state, &mut o.frames, &mut o.recorder)?;

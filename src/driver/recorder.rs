@@ -4,10 +4,11 @@
 use std::time::Instant;
 
 use super::summary::{
-    AmgRecord, CutbackRecord, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
+    AmgRecord, CutbackRecord, EnergySummary, FailureRecord, RunStatus, StepRecord, Summary, Tally, Timings, Uniqueness,
 };
+use super::watch::{RunWarning, Watch};
 use super::OutputPlan;
-use crate::model::{LawConstants, Problem, State};
+use crate::model::{LawConstants, Problem, State, StepEnergy};
 use crate::step::{LinearKind, PreconditionerKind, SolverKind, SolverParams, StepInfo, StepSolver};
 use crate::time::Levels;
 
@@ -51,6 +52,7 @@ pub(super) struct Recorder<'a, 'p> {
     plan: &'a OutputPlan,
     levels: &'a Levels<'p>,
     report: Report,
+    watch: Watch,
     /// The run's tally (a continued run's goes on from its checkpoint's).
     pub tally: Tally,
     /// The loop's linear work before this process (a continued run's checkpoint has it): the
@@ -82,6 +84,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             plan,
             levels,
             report: Report::new(problem, levels.first()),
+            watch: Watch::new(problem),
             solves_before: tally.solves,
             sweeps_before: tally.sweeps,
             tally,
@@ -123,6 +126,9 @@ impl<'a, 'p> Recorder<'a, 'p> {
             slip_nodes,
             stick_nodes: problem.contact.len() - slip_nodes,
             seconds: self.step_clock.elapsed().as_secs_f64(),
+            energy: self.cumulative_energy(&info.energy),
+            energy_residual: info.energy.relative_residual(),
+            heat_residual: info.energy.relative_heat_residual(),
         };
         self.tally.add_step(info, step);
         if info.cutback_depth > 0 {
@@ -134,6 +140,21 @@ impl<'a, 'p> Recorder<'a, 'p> {
             });
         }
         step
+    }
+
+    /// The energies from t = 0 to the end of a step of energies `step`: the last record's
+    /// (none: the step is the first) with the step's added.
+    fn cumulative_energy(&self, step: &StepEnergy) -> StepEnergy {
+        let mut total = self.tally.steps.last().map(|s| s.energy).unwrap_or_default();
+        total.absorb(step);
+        total
+    }
+
+    /// The warnings the step to `state` (its record `step`) raises, kept in the tally.
+    pub fn watch(&mut self, state: &State, step: &StepRecord) -> Vec<RunWarning> {
+        let new = self.watch.check(self.problem, state, step, &self.tally.warnings);
+        self.tally.warnings.extend(new.iter().cloned());
+        new
     }
 
     /// The step's observers are done: the next step's clock starts.
@@ -199,6 +220,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             laws.heat_exchange, laws.m_theta, laws.l_tau
         ));
         lines.extend(laws.warnings.iter().map(|w| format!("warning: {w}")));
+        lines.extend(self.watch.header_line());
         lines.push(match &self.report.uniqueness {
             Some(u) => u.line(),
             None => "uniqueness: not computed (the iterative path's fast solver never forms the contact compliance)"
@@ -250,6 +272,9 @@ impl<'a, 'p> Recorder<'a, 'p> {
             failure,
             timings: self.timings.clone(),
             outputs: tally.outputs.clone(),
+            energy: EnergySummary::of(&tally.steps),
+            warnings: tally.warnings.clone(),
+            outcome: status.outcome(tally.warnings.len()),
         }
     }
 }

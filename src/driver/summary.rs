@@ -7,6 +7,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::Error;
 use crate::model::ContactRow;
 use crate::model::State;
+use crate::model::StepEnergy;
+
+pub use super::watch::RunWarning;
 use crate::output::PvdEntry;
 use crate::step::{StepFailure, StepInfo};
 use crate::time::TimeError;
@@ -155,6 +158,63 @@ pub struct Summary {
     pub failure: Option<FailureRecord>,
     pub timings: Timings,
     pub outputs: Vec<OutputRecord>,
+    /// The energies over the run (none before the first step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy: Option<EnergySummary>,
+    /// The warnings of a run that leaves the plausible (`watch`), once per kind.
+    pub warnings: Vec<RunWarning>,
+    /// `status`, and for a completed run with warnings "completed with N warnings".
+    pub outcome: String,
+}
+
+/// The energies of a run: the levels at the start and the end, the flows summed over its steps
+/// ([`StepEnergy`] from t = 0 to the last step), and the worst step's balance residuals.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct EnergySummary {
+    /// K₀, E₀, H₀.
+    pub initial_kinetic: f64,
+    pub initial_elastic: f64,
+    pub initial_thermal: f64,
+    /// The levels at the last step and the sums from t = 0.
+    pub total: StepEnergy,
+    /// The largest relative residual of a step's mechanical and heat balance.
+    pub max_energy_residual: f64,
+    pub max_heat_residual: f64,
+    /// Above these, a step's residual is a warning.
+    pub tolerance: f64,
+    pub heat_tolerance: f64,
+}
+
+impl EnergySummary {
+    /// Over the recorded steps (none: `None`).
+    pub fn of(steps: &[StepRecord]) -> Option<Self> {
+        let (first, total) = (steps.first()?.energy, steps.last()?.energy);
+        let worst = |f: fn(&StepRecord) -> f64| steps.iter().map(f).fold(0.0, f64::max);
+        // The levels before the first step, from its own change (smaller than the run's).
+        Some(EnergySummary {
+            initial_kinetic: first.kinetic - first.kinetic_change,
+            initial_elastic: first.elastic - first.elastic_change,
+            initial_thermal: first.thermal - first.thermal_change,
+            total,
+            max_energy_residual: worst(|s| s.energy_residual),
+            max_heat_residual: worst(|s| s.heat_residual),
+            tolerance: super::watch::BALANCE_TOLERANCE,
+            heat_tolerance: super::watch::HEAT_BALANCE_TOLERANCE,
+        })
+    }
+}
+
+impl RunStatus {
+    /// "completed", "completed with N warnings", "failed", …
+    pub fn outcome(self, warnings: usize) -> String {
+        let status = serde_json::to_value(self).expect("a status serializes");
+        let name = status.as_str().unwrap_or("unknown").to_string();
+        match warnings {
+            0 => name,
+            1 => format!("{name} with 1 warning"),
+            n => format!("{name} with {n} warnings"),
+        }
+    }
 }
 
 /// The step's sufficient condition for a unique solution (MODEL.md §6): for frozen θ the
@@ -330,6 +390,15 @@ pub struct StepRecord {
     pub stick_nodes: usize,
     /// Wall time of the step, s.
     pub seconds: f64,
+    /// The energies from t = 0 to t_n ([`crate::model::energy`]): the levels at t_n, the
+    /// changes, flows and residuals summed over the steps (0 in checkpoints from before them).
+    #[serde(default)]
+    pub energy: StepEnergy,
+    /// This step's mechanical and heat balance residuals relative to their largest terms.
+    #[serde(default)]
+    pub energy_residual: f64,
+    #[serde(default)]
+    pub heat_residual: f64,
 }
 
 /// Increments not measured (and those of checkpoints written before steps.csv had them).
@@ -344,8 +413,12 @@ fn nan_from_null<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<[f
 }
 
 impl StepRecord {
-    /// The columns of `steps.csv`.
-    pub const HEADER: [&'static str; 17] = [
+    /// The columns of `steps.csv`: the solver's figures, then the energies (J; in 2D J per
+    /// metre of thickness): the levels K, E, H at t_n, the dissipations, works and heats summed
+    /// from t = 0 (so that K + E + viscous + numerical + frictional + thermal stress work − load
+    /// work − foundation work − energy_residual_J = K₀ + E₀ on every row), and this step's
+    /// residuals relative to their balance's largest term (docs/energy.md).
+    pub const HEADER: [&'static str; 35] = [
         "n",
         "t",
         "convexification",
@@ -363,6 +436,24 @@ impl StepRecord {
         "slip",
         "stick",
         "seconds",
+        "kinetic_J",
+        "elastic_J",
+        "thermal_J",
+        "viscous_dissipation_J",
+        "numerical_dissipation_J",
+        "frictional_dissipation_J",
+        "thermal_stress_work_J",
+        "load_work_J",
+        "foundation_work_J",
+        "energy_residual_J",
+        "energy_residual_rel",
+        "heat_source_J",
+        "heat_exchange_J",
+        "heat_friction_J",
+        "heat_coupling_J",
+        "heat_dirichlet_J",
+        "heat_residual_J",
+        "heat_residual_rel",
     ];
 
     /// The record as a `steps.csv` row.
@@ -384,6 +475,27 @@ impl StepRecord {
             self.slip_nodes as f64,
             self.stick_nodes as f64,
             self.seconds,
+        ]);
+        let e = &self.energy;
+        row.extend([
+            e.kinetic,
+            e.elastic,
+            e.thermal,
+            e.viscous,
+            e.numerical,
+            e.frictional,
+            e.thermal_stress,
+            e.loads,
+            e.foundation,
+            e.residual,
+            self.energy_residual,
+            e.heat_sources,
+            e.heat_exchange,
+            e.heat_friction,
+            e.heat_coupling,
+            e.heat_dirichlet,
+            e.heat_residual,
+            self.heat_residual,
         ]);
         row
     }
@@ -424,6 +536,9 @@ pub struct Tally {
     /// The frames written, as `solution.pvd` lists them.
     pub frames: Vec<PvdEntry>,
     pub steps: Vec<StepRecord>,
+    /// The warnings of a run that leaves the plausible, once per kind (`watch`).
+    #[serde(default)]
+    pub warnings: Vec<RunWarning>,
 }
 
 impl Tally {

@@ -10,13 +10,17 @@
 //! - [`ContactLaws`]: the laws on Γ_C node by node at one step ([`Friction`], [`Heating`]);
 //! - [`ContactRow`]: the state at a node of Γ_C, as output reads it;
 //! - [`thermal`]: thermal boundary conditions per part ([`ThermalCondition`]);
+//! - [`energy`]: the energies of a step and their balances ([`StepEnergy`]);
+//! - [`plausibility`]: the rigid motions nothing holds, the plausible temperatures;
 //! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
 
 mod contact_rows;
+pub mod energy;
 mod error;
 mod laws;
 pub mod norms;
 mod pressure;
+pub mod plausibility;
 mod problem;
 pub mod samples;
 mod state;
@@ -24,6 +28,7 @@ mod step_matrix;
 pub mod thermal;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
+pub use energy::{step_energy, StepEnergy};
 pub use error::ModelError;
 pub use laws::{foundation_tangential, law_scale, ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
 pub use pressure::ContactPressure;

@@ -723,6 +723,15 @@ impl Problem {
     /// −ℓ_p ∂j(θ_p) at the nodes of Γ_C evaluated at the temperatures `exchange_at` instead
     /// (nodal quadrature, the friction's).
     pub fn heat_load(&self, t: f64, exchange_at: &[f64]) -> Result<Vec<f64>, Error> {
+        let mut heat = self.exchange_heat(t, exchange_at);
+        self.add_heat_sources(t, &mut heat)?;
+        Ok(heat)
+    }
+
+    /// The heat exchange's part of [`Problem::heat_load`]: k_e θ_R ∫_ΓC η for an affine
+    /// exchange (its −k_e θ part is in 𝒦_θ), −ℓ_p ∂j(θ_p) at the nodes of Γ_C at the
+    /// temperatures `exchange_at` for a nonlinear one.
+    pub fn exchange_heat(&self, t: f64, exchange_at: &[f64]) -> Vec<f64> {
         let mut heat = self.exchange_load.clone();
         if self.exchange.robin().is_none() {
             for (p, &weight) in self.contact_weights.iter().enumerate() {
@@ -736,14 +745,20 @@ impl Problem {
                 }
             }
         }
+        heat
+    }
+
+    /// Adds the heat sources' part of [`Problem::heat_load`], ∫ g(t) η and the extra heat
+    /// loads, to a full temperature vector.
+    pub fn add_heat_sources(&self, t: f64, heat: &mut [f64]) -> Result<(), Error> {
         for load in &self.heat_sources {
-            load.add_to(&self.mesh, t, &mut heat)?;
+            load.add_to(&self.mesh, t, heat)?;
         }
-        self.thermal.add_loads(&self.mesh, t, &mut heat)?;
+        self.thermal.add_loads(&self.mesh, t, heat)?;
         if let Some(extra) = &self.extra_loads {
-            extra.add_heat(self, t, &mut heat);
+            extra.add_heat(self, t, heat);
         }
-        Ok(heat)
+        Ok(())
     }
 
     /// θ_D(x_p, t) at the Dirichlet nodes, zero elsewhere: [`Problem::theta_dirichlet`]

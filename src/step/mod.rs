@@ -286,6 +286,8 @@ pub struct StepInfo {
     pub exchange_iterations: usize,
     /// Iterates of the fixed point on the contact pressure (Coulomb friction; 0 otherwise).
     pub pressure_iterations: usize,
+    /// The step's energies ([`crate::model::energy`]), substeps summed; set by the time loop.
+    pub energy: crate::model::StepEnergy,
 }
 
 impl StepInfo {
@@ -302,6 +304,7 @@ impl StepInfo {
         self.krylov_iterations += other.krylov_iterations;
         self.exchange_iterations += other.exchange_iterations;
         self.pressure_iterations += other.pressure_iterations;
+        self.energy.absorb(&other.energy);
     }
 }
 

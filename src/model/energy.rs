@@ -1,0 +1,315 @@
+//! The energies of one time step, from the states at t_{n−1} and t_n: what Abaqus users read as
+//! ALLKE, ALLSE, ALLVD, ALLFD and ALLWK, and the heat exchanged, each a figure a user can check.
+//!
+//! Depends on: [`super::problem`], [`super::state`], [`super::laws`], [`crate::la`].
+//!
+//! **The mechanical balance (an identity of the scheme).** Step n of Problem 14 on full nodal
+//! vectors (u_n = u_{n−1} + k w_n, θ_n with θ_D at the fixed nodes) is
+//!
+//! ```text
+//! ℳ(w_n − w_{n−1})/k + 𝒦_A w_n + 𝒦_B u_n + G θ_n = F_n + Pᵀ Ξ_n   tested by every v in E^h,
+//! ```
+//!
+//! F_n = [`Problem::force`] (data loads, the reference-temperature load θ_ref G 1, extra loads)
+//! and (Pᵀ Ξ_n)·v = Σ_i ℓ_i ξ_i·v_τ,i (nodal quadrature on Γ_C, ξ_i the friction stress on the
+//! body in the node's tangent coordinates). w_n lies in E^h, so v = w_n is a test function, and
+//! k w_nᵀ(…) splits exactly into
+//!
+//! ```text
+//! ΔK + ΔE + D_num + D_visc + D_fric + W_θ = W_F + W_found
+//! K = ½ wᵀℳw, E = ½ uᵀ𝒦_B u                                       kinetic, elastic energy
+//! D_num  = ½|w_n − w_{n−1}|²_ℳ + ½|u_n − u_{n−1}|²_{𝒦_B} ≥ 0     backward Euler's dissipation
+//! D_visc = k w_nᵀ𝒦_A w_n ≥ 0                                         viscous dissipation
+//! D_fric = −k Σ_i ℓ_i ξ_i·(w_τ,i − v_F,i) ≥ 0                        frictional dissipation
+//! W_θ    = k w_nᵀ G θ_n                                              work of the thermal stress
+//! W_F    = k F_nᵀ w_n                                                work of the loads
+//! W_found = k Σ_i ℓ_i ξ_i·v_F,i                                     the foundation's work on the body
+//! ```
+//!
+//! (from wᵀℳ(w − w′) = ½|w|² − ½|w′|² + ½|w − w′|² in the ℳ-norm, and likewise for 𝒦_B with
+//! u − u′ = k w). v_F is the foundation's tangential velocity at each contact node (zero for the
+//! paper's foundation at rest): friction dissipates on the relative slip w_τ − v_F, and
+//! D_fric and W_found together are −k Σ ℓ_i ξ_i·w_τ,i + k Σ ℓ_i ξ_i·v_F,i, so v_F enters in the
+//! split only. The residual LHS − RHS is k w_nᵀ r_n for the residual r_n of the step's equations:
+//! zero for an exact solve, so it measures how well the step was solved (the convexification
+//! loop's and the Krylov solver's tolerances), relative to the largest term ([`StepEnergy::scale`]).
+//!
+//! **The heat balance (an identity once the Dirichlet heat is defined as a reaction).**
+//! H = Σ (ℳ_θ θ)_p = ∫ ρ c_p θ (measured from 0 °C). Summing the heat equation's rows over every
+//! node (η = 1, on full vectors):
+//!
+//! ```text
+//! ΔH = Q_src + Q_exch + Q_fric + Q_coup + Q_D + R_θ
+//! Q_src  = k Σ (∫ g_n η)                      heat sources (and extra heat loads)
+//! Q_exch = k (Σ L_exch(θ_n) − 1ᵀ𝒦_θ θ_n)     exchange with the foundation on Γ_C (the Robin
+//!                                             part of 𝒦_θ; conduction sends 1 to 0)
+//! Q_fric = k Σ_i ℓ_i share·h_τ(|w_τ,i − v_F,i|)   frictional heat entering the body
+//! Q_coup = k 1ᵀGᵀw_n                          the coupling term c ∫ div w
+//! Q_D    = k Σ_{θ fixed} r_θ,p                heat through the fixed-temperature boundary: the
+//!                                             reaction, the residual of those rows
+//! R_θ    = k Σ_{θ free} r_θ,p                 the residual of the solved rows
+//! ```
+//!
+//! with r_θ = ℳ_θ(θ_n − θ_{n−1})/k + 𝒦_θ θ_n − Gᵀw_n − loads − frictional heat on full vectors.
+//! Q_D closes the balance by definition at the fixed nodes; R_θ is a check of the solve that
+//! can fail (a nonlinear exchange is evaluated at θ_n here, at the last iterate in the step).
+//!
+//! **What is not an identity.** The sum K + E + H is not conserved by the model: the coupling
+//! terms W_θ = k wᵀGθ and Q_coup = k 1ᵀGᵀw differ (the paper's linearized coupling is not
+//! energy-consistent), and the frictional heat h_τ is a datum independent of D_fric.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::ModelError as Error;
+use super::laws::ContactLaws;
+use super::problem::Problem;
+use super::state::State;
+use crate::la::vector::{dot, norm2};
+
+/// The energies of one step (or of the substeps of a cut-back step, summed), J (in 2D, J per
+/// metre of thickness). Levels at t_n; changes and flows over the step; flows into the body
+/// positive, dissipations positive.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepEnergy {
+    /// K_n = ½ w_nᵀℳw_n.
+    pub kinetic: f64,
+    /// E_n = ½ u_nᵀ𝒦_B u_n.
+    pub elastic: f64,
+    /// H_n = ∫ ρ c_p θ_n.
+    pub thermal: f64,
+    /// K_n − K_{n−1}, E_n − E_{n−1}, H_n − H_{n−1}.
+    pub kinetic_change: f64,
+    pub elastic_change: f64,
+    pub thermal_change: f64,
+    /// D_visc = k w_nᵀ𝒦_A w_n.
+    pub viscous: f64,
+    /// D_num = ½|Δw|²_ℳ + ½|Δu|²_{𝒦_B}.
+    pub numerical: f64,
+    /// D_fric = −k Σ ℓ_i ξ_i·(w_τ,i − v_F,i).
+    pub frictional: f64,
+    /// W_θ = k w_nᵀGθ_n.
+    pub thermal_stress: f64,
+    /// W_F = k F_nᵀw_n.
+    pub loads: f64,
+    /// W_found = k Σ ℓ_i ξ_i·v_F,i.
+    pub foundation: f64,
+    /// ΔK + ΔE + D_num + D_visc + D_fric + W_θ − W_F − W_found.
+    pub residual: f64,
+    /// The largest term of the balance in absolute value (K_n, E_n, K_{n−1}, E_{n−1} and every
+    /// flow): what `residual` is relative to.
+    pub scale: f64,
+    /// Q_src, Q_exch, Q_fric, Q_coup, Q_D (heat into the body over the step).
+    pub heat_sources: f64,
+    pub heat_exchange: f64,
+    pub heat_friction: f64,
+    pub heat_coupling: f64,
+    pub heat_dirichlet: f64,
+    /// R_θ = ΔH − the heats above.
+    pub heat_residual: f64,
+    /// The largest of |ΔH| and the heats: what `heat_residual` is relative to.
+    pub heat_scale: f64,
+}
+
+impl StepEnergy {
+    /// |residual| / scale (0 where every term vanishes).
+    pub fn relative_residual(&self) -> f64 {
+        relative(self.residual, self.scale)
+    }
+
+    /// |heat_residual| / heat_scale.
+    pub fn relative_heat_residual(&self) -> f64 {
+        relative(self.heat_residual, self.heat_scale)
+    }
+
+    /// Adds a later substep: its levels, the sums of changes and flows, the larger scale.
+    pub fn absorb(&mut self, later: &StepEnergy) {
+        let sum = |a: &mut f64, b: f64| *a += b;
+        self.kinetic = later.kinetic;
+        self.elastic = later.elastic;
+        self.thermal = later.thermal;
+        for (a, b) in self.flows_mut().into_iter().zip(later.flows()) {
+            sum(a, b);
+        }
+        // The sums' terms count too: a step's changes may exceed each substep's terms.
+        self.scale = self.scale.max(later.scale).max(self.largest_mechanical_term());
+        self.heat_scale = self.heat_scale.max(later.heat_scale).max(self.largest_heat_term());
+    }
+
+    /// The largest term of the mechanical balance in absolute value: K_n, E_n, K_{n−1},
+    /// E_{n−1} and every flow.
+    fn largest_mechanical_term(&self) -> f64 {
+        [
+            self.kinetic,
+            self.elastic,
+            self.kinetic - self.kinetic_change,
+            self.elastic - self.elastic_change,
+            self.numerical,
+            self.viscous,
+            self.frictional,
+            self.thermal_stress,
+            self.loads,
+            self.foundation,
+        ]
+        .into_iter()
+        .fold(0.0, |s, v| s.max(v.abs()))
+    }
+
+    /// The largest of |ΔH| and the heats.
+    fn largest_heat_term(&self) -> f64 {
+        [
+            self.thermal_change,
+            self.heat_sources,
+            self.heat_exchange,
+            self.heat_friction,
+            self.heat_coupling,
+            self.heat_dirichlet,
+        ]
+        .into_iter()
+        .fold(0.0, |s, v| s.max(v.abs()))
+    }
+
+    /// The changes, flows and residuals (every field summed over substeps), in a fixed order.
+    fn flows(&self) -> [f64; 16] {
+        let mut copy = *self;
+        copy.flows_mut().map(|v| *v)
+    }
+
+    fn flows_mut(&mut self) -> [&mut f64; 16] {
+        [
+            &mut self.kinetic_change,
+            &mut self.elastic_change,
+            &mut self.thermal_change,
+            &mut self.viscous,
+            &mut self.numerical,
+            &mut self.frictional,
+            &mut self.thermal_stress,
+            &mut self.loads,
+            &mut self.foundation,
+            &mut self.residual,
+            &mut self.heat_sources,
+            &mut self.heat_exchange,
+            &mut self.heat_friction,
+            &mut self.heat_coupling,
+            &mut self.heat_dirichlet,
+            &mut self.heat_residual,
+        ]
+    }
+}
+
+fn relative(value: f64, scale: f64) -> f64 {
+    if scale > 0.0 {
+        value.abs() / scale
+    } else {
+        0.0
+    }
+}
+
+/// K, E and H of a state (the levels at its time): three mat-vecs.
+pub fn energy_levels(problem: &Problem, state: &State) -> (f64, f64, f64) {
+    let mats = &problem.matrices;
+    (
+        0.5 * mats.mass.quadratic_form(&state.w),
+        0.5 * mats.elasticity.quadratic_form(&state.u),
+        mats.heat_mass.mul(&state.theta).iter().sum(),
+    )
+}
+
+/// The energies of the step from `previous` to `state` (module docs), with the foundation's
+/// tangential velocity `foundation` at t_n at the contact nodes (node-major in their tangent
+/// coordinates, d − 1 per node; zeros for a foundation at rest). Ten sparse mat-vecs with the
+/// assembled matrices, the loads at t_n, and the laws on Γ_C once.
+pub fn step_energy(
+    problem: &Problem,
+    previous: &State,
+    state: &State,
+    foundation: &[f64],
+) -> Result<StepEnergy, Error> {
+    let k = state.t - previous.t;
+    let mats = &problem.matrices;
+    let (w, u, theta) = (&state.w, &state.u, &state.theta);
+    let dw: Vec<f64> = w.iter().zip(&previous.w).map(|(a, b)| a - b).collect();
+    let du: Vec<f64> = u.iter().zip(&previous.u).map(|(a, b)| a - b).collect();
+    let mass_w = mats.mass.mul(w);
+    let mass_dw = mats.mass.mul(&dw);
+    let elastic_u = mats.elasticity.mul(u);
+    let elastic_du = mats.elasticity.mul(&du);
+    let force = problem.force(state.t)?;
+    let mut thermal_stress = mats.coupling.mul(theta);
+    thermal_stress.iter_mut().for_each(|v| *v *= k);
+
+    // ½wᵀℳw − ½w′ᵀℳw′ = wᵀℳΔw − ½ΔwᵀℳΔw, without the difference of two large numbers.
+    let (dw_m_dw, du_b_du) = (dot(&dw, &mass_dw), dot(&du, &elastic_du));
+    let mut e = StepEnergy {
+        kinetic: 0.5 * dot(w, &mass_w),
+        elastic: 0.5 * dot(u, &elastic_u),
+        kinetic_change: dot(w, &mass_dw) - 0.5 * dw_m_dw,
+        elastic_change: dot(u, &elastic_du) - 0.5 * du_b_du,
+        numerical: 0.5 * (dw_m_dw + du_b_du),
+        viscous: k * mats.viscosity.quadratic_form(w),
+        thermal_stress: dot(w, &thermal_stress),
+        loads: k * dot(&force, w),
+        ..StepEnergy::default()
+    };
+
+    // Friction on Γ_C, and the frictional heat it makes, on the relative slip.
+    let laws = ContactLaws::of_state(problem, state)?;
+    let td = problem.dim() - 1;
+    let w_tau = super::contact_tangential(problem, w);
+    let mut friction_heat = vec![0.0; problem.mesh.n_nodes()];
+    for (i, node) in problem.contact.iter().enumerate() {
+        let range = i * td..(i + 1) * td;
+        let (xi, v_f) = (&state.xi[range.clone()], &foundation[range.clone()]);
+        let slip: Vec<f64> = w_tau[range].iter().zip(v_f).map(|(a, b)| a - b).collect();
+        e.frictional -= k * node.weight * dot(xi, &slip);
+        e.foundation += k * node.weight * dot(xi, v_f);
+        friction_heat[node.node] = node.weight * laws.heat(i, norm2(&slip));
+    }
+    e.residual = e.kinetic_change + e.elastic_change + e.numerical + e.viscous + e.frictional + e.thermal_stress
+        - e.loads
+        - e.foundation;
+    e.scale = e.largest_mechanical_term();
+    heat_balance(problem, previous, state, &friction_heat, &mut e)?;
+    Ok(e)
+}
+
+/// The heat terms of [`StepEnergy`] (module docs): the heat equation's residual on full vectors,
+/// its fixed rows the reaction Q_D, its free rows R_θ.
+fn heat_balance(
+    problem: &Problem,
+    previous: &State,
+    state: &State,
+    friction_heat: &[f64],
+    e: &mut StepEnergy,
+) -> Result<(), Error> {
+    let k = state.t - previous.t;
+    let mats = &problem.matrices;
+    let theta = &state.theta;
+    let dtheta: Vec<f64> = theta.iter().zip(&previous.theta).map(|(a, b)| a - b).collect();
+    let mut sources = vec![0.0; theta.len()];
+    problem.add_heat_sources(state.t, &mut sources)?;
+    let exchange = problem.exchange_heat(state.t, theta);
+    let conduction = mats.conduction.mul(theta);
+    let mut coupling = vec![0.0; theta.len()];
+    mats.coupling.mul_transpose_add(1.0, &state.w, &mut coupling);
+    let heat_mass_dtheta = mats.heat_mass.mul(&dtheta);
+    let mut residual: Vec<f64> = heat_mass_dtheta.iter().map(|r| r / k).collect();
+    let rows = (residual.iter_mut())
+        .zip(conduction.iter().zip(&coupling))
+        .zip(sources.iter().zip(&exchange));
+    for (p, ((r, (c, g)), (s, x))) in rows.enumerate() {
+        *r += c - g - s - x - friction_heat[p];
+    }
+    let sum = |v: &[f64]| k * v.iter().sum::<f64>();
+    e.thermal = mats.heat_mass.mul(theta).iter().sum();
+    e.thermal_change = heat_mass_dtheta.iter().sum();
+    e.heat_sources = sum(&sources);
+    e.heat_exchange = sum(&exchange) - sum(&conduction);
+    e.heat_friction = sum(friction_heat);
+    e.heat_coupling = sum(&coupling);
+    let fixed = |p: usize| problem.temperature.free[p].is_none();
+    e.heat_dirichlet = k * (0..theta.len()).filter(|&p| fixed(p)).map(|p| residual[p]).sum::<f64>();
+    e.heat_residual =
+        e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
+    e.heat_scale = e.largest_heat_term();
+    Ok(())
+}
