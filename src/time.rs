@@ -127,8 +127,8 @@ impl<'a> Levels<'a> {
     /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]),
     /// with the foundation's velocity at the contact nodes at t_n (zero at rest).
     fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
-        let foundation = crate::model::foundation_tangential(self.problem, state.t)?
-            .unwrap_or_else(|| vec![0.0; state.xi.len()]);
+        let foundation =
+            crate::model::foundation_tangential(self.problem, state.t)?.unwrap_or_else(|| vec![0.0; state.xi.len()]);
         Ok(crate::model::step_energy(self.problem, previous, state, &foundation)?)
     }
 

@@ -401,11 +401,14 @@ fn bad_laws_are_refused_by_key() {
         "friction={law=\"table\", bound=1.0, file=\"/nonexistent/mu.csv\"}",
         &["friction.file", "mu.csv"],
     );
-    let e = Scenario::load(None, &["friction.law=\"coulomb\"".into()])
+    let e = Scenario::load(None, &["friction.law=\"amontons\"".into()])
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("coulomb") && e.contains("velocity-weakening") && e.contains("slip-distance-weakening"),
+        e.contains("amontons")
+            && e.contains("coulomb")
+            && e.contains("velocity-weakening")
+            && e.contains("slip-distance-weakening"),
         "{e}"
     );
 }

@@ -1075,6 +1075,7 @@ mod tests {
                     slip: false,
                     theta: 0.0,
                     slip_distance: None,
+                    pressure: None,
                 }
             })
             .collect()

@@ -7,7 +7,10 @@ use std::path::Path;
 use toml::{Table, Value};
 
 use super::validate::{invalid, MAX_MAGNITUDE};
-use super::{Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, ThermalSpec, Traction, THERMAL_CONDITIONS};
+use super::{
+    Affine, DatumSpec, FoundationSpec, FrictionSpec, HeatExchangeSpec, NormalSpec, Scenario, ThermalSpec, Traction,
+    THERMAL_CONDITIONS,
+};
 use crate::contact::{
     Coulomb, ExpressionExchange, ExpressionFriction, ExpressionHeating, Foundation, FrictionLaw, FrictionalHeating,
     HeatExchange, LinearHeating, QuadraticExchange, SlipDistanceWeakening, TabulatedExchange, TabulatedFriction,

@@ -699,7 +699,11 @@ mod tests {
             |v: f64| crate::scenario::DatumSpec::Scalar(Box::new(crate::scenario::DatumSpec::Numbers(vec![v])));
         let one = crate::scenario::FrictionSpecs::One;
         let t = Scenario::load(None, &["friction={law=\"tresca\", bound=3.0}".into()]).unwrap();
-        let tresca = |bound| FrictionSpec::Tresca { part: None, bound };
+        let tresca = |bound| FrictionSpec::Tresca {
+            part: None,
+            bound: Some(bound),
+            normal: None,
+        };
         assert_eq!(t.friction, one(tresca(number(3.0))));
         let t = Scenario::load(None, &["friction.law=tresca".into(), "friction.bound=100".into()]).unwrap();
         assert_eq!(t.friction, one(tresca(number(100.0))));
@@ -719,7 +723,8 @@ mod tests {
             back.friction,
             one(FrictionSpec::VelocityWeakening {
                 part: None,
-                bound: number(150.0),
+                bound: Some(number(150.0)),
+                normal: None,
                 a: 1.0,
                 b: 0.2,
                 alpha: 50.0

@@ -75,10 +75,15 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("boundary.contact") && e.contains("middle"), "{e}");
+        let e = Scenario::load(None, &["friction.law=amontons".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("amontons") && e.contains("coulomb"), "{e}");
+        // A known law without its keys names the missing one.
         let e = Scenario::load(None, &["friction.law=coulomb".into()])
             .unwrap_err()
             .to_string();
-        assert!(e.contains("coulomb"), "{e}");
+        assert!(e.contains("friction.coefficient"), "{e}");
         let e = Scenario::load(Some("[time]\nsteps = -4"), &[]).unwrap_err().to_string();
         assert!(e.contains("time.steps") && e.contains("-4"), "{e}");
         assert!(e.ends_with("(expected a non-negative integer)"), "{e}");

@@ -334,7 +334,7 @@ pub fn make_figures(
         columns: 1,
         scale: options.scale,
         gamma_c: gamma_c.clone(),
-        force_unit: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
+        force_unit: arrow_unit(&main.problem),
     };
     files.extend(figures::write(&fig2, dir)?);
 
@@ -362,7 +362,7 @@ pub fn make_figures(
             columns: 1,
             scale: options.scale,
             gamma_c: gamma_c.clone(),
-            force_unit: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
+            force_unit: arrow_unit(&main.problem),
         };
         if !fig3.panels.is_empty() {
             files.extend(figures::write(&fig3, dir)?);
@@ -432,4 +432,15 @@ pub fn make_figures(
 pub(crate) fn write_json(path: &Path, value: &impl Serialize) -> Result<(), OutputError> {
     let json = serde_json::to_vec_pretty(value).expect("plain data serializes");
     write_atomic(path, &json).map_err(OutputError::io(path))
+}
+
+/// The friction stress drawn as a full-length arrow: the bound at rest μ(0)S where it is
+/// prescribed; where it scales with the contact pressure (Coulomb) no datum gives it, and the
+/// figure takes its largest |ξ| (0).
+fn arrow_unit(problem: &crate::model::Problem) -> f64 {
+    if problem.pressure.is_some() {
+        0.0
+    } else {
+        problem.friction_bound([0.0; 3], 0.0, 0.0)
+    }
 }
