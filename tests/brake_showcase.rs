@@ -52,7 +52,10 @@ fn check(file: &str, summary: &Summary, state: &State, problem: &thermocontact::
         .collect();
     let mean = middle.iter().sum::<f64>() / middle.len() as f64;
     let expected = 3e5 * 0.166 / 0.150;
-    assert!((0.7..1.05).contains(&(mean / expected)), "{file}: mean pressure {mean:e}, expected ≈ {expected:e}");
+    assert!(
+        (0.7..1.05).contains(&(mean / expected)),
+        "{file}: mean pressure {mean:e}, expected ≈ {expected:e}"
+    );
     // Coulomb: at every slipping node the friction stress is μ(r) p with the reported p (the
     // step solved with the pressure of the last iterate, which the reported one matches to
     // ε_conv = 10⁻⁶ of the largest).
@@ -60,7 +63,11 @@ fn check(file: &str, summary: &Summary, state: &State, problem: &thermocontact::
         let mu = 0.35 + 0.1 * (-r.slip_rate() / 2.0).exp();
         let p = r.pressure.unwrap();
         let xi = thermocontact::la::vector::norm2(&r.xi);
-        assert!((xi - mu * p).abs() <= 1e-5 * (mu * expected), "{file}: |ξ| = {xi}, μ p = {}", mu * p);
+        assert!(
+            (xi - mu * p).abs() <= 1e-5 * (mu * expected),
+            "{file}: |ξ| = {xi}, μ p = {}",
+            mu * p
+        );
     }
     let energy = summary.energy.as_ref().unwrap();
     let total = &energy.total;

@@ -366,3 +366,22 @@ def test_energies_balance_at_every_step(coarse):
     assert summary["energy"]["max_energy_residual"] <= 1e-12
     first = result.outputs[0]
     assert first.info.energy["kinetic"] == e["kinetic"][first.n - 1]
+
+
+def test_the_brake_reports_the_contact_pressure_and_the_relative_slip():
+    # scenarios/brake_pad.toml, its first 0.2 s: Coulomb friction on a turning drum. The contact
+    # table has the pressure (where a law scales with it) and the slip relative to the drum.
+    overrides = {"time.final_time": 0.2, "time.steps": 4, "output.times": [0.2]}
+    scenario = tc.Scenario.load(REPOSITORY / "scenarios" / "brake_pad.toml", overrides)
+    result = tc.Simulation(scenario).run()
+    contact = result.last.contact
+    assert contact.pressure is not None and contact.pressure.shape == (len(contact),)
+    assert np.all(contact.pressure >= 0.0) and contact.pressure.max() > 1e5
+    assert "pressure" in contact.columns and contact.table().shape[1] == len(contact.columns)
+    # The drum's surface moves at ω R = 60 (1 − 0.2/3) · 0.15 = 8.4 m/s; the held pad barely moves.
+    assert np.allclose(np.abs(contact.w_tau[:, 0]), 8.4, rtol=1e-3)
+    assert contact.slip_count == len(contact)
+    mu = 0.35 + 0.1 * np.exp(-np.abs(contact.w_tau[:, 0]) / 2)
+    assert np.allclose(np.abs(contact.xi[:, 0]), mu * contact.pressure, rtol=1e-5)
+    # The paper's example has no pressure column.
+    assert tc.Simulation(tc.Scenario(overrides=COARSE)).run().last.contact.pressure is None

@@ -119,6 +119,8 @@ class Contact:
     bound: _F64
     slip: npt.NDArray[np.bool_]
     theta: _F64
+    slip_distance: Optional[_F64]
+    pressure: Optional[_F64]
     @property
     def slip_count(self) -> int: ...
     @property

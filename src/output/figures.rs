@@ -629,7 +629,8 @@ pub struct ContactProfileFigure {
     /// Γ_C as ordered pieces: the abscissa is the arc length s along them, one piece after the
     /// other.
     pub gamma_c: Vec<Chain>,
-    /// μ(0)S, the friction bound at rest, drawn as ±bound on the ξ panel.
+    /// μ(0)S, the friction bound at rest, drawn as ±bound on the ξ panel (≤ 0: no line, for a
+    /// bound that scales with the contact pressure and has no one value).
     pub bound_at_rest: f64,
 }
 
@@ -711,7 +712,7 @@ impl Figure for ContactProfileFigure {
                     }
                 }
             }
-            if q == 2 {
+            if q == 2 && self.bound_at_rest > 0.0 {
                 let (x0, x1) = (s_range.x0, s_range.x1);
                 for sign in [1.0, -1.0] {
                     let series = chart.draw_series(DashedLineSeries::new(

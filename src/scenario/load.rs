@@ -379,6 +379,7 @@ const OPTIONAL_KEYS: &[&str] = &[
     "initial.from",
     "friction.part",
     "friction.normal",
+    "friction.bound",
     "foundation",
     "frictional_heating.value",
     "frictional_heating.friction_power",

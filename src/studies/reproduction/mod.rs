@@ -409,7 +409,7 @@ pub fn make_figures(
             .map(|s| (s.record.t, s.record.contact.clone()))
             .collect(),
         gamma_c,
-        bound_at_rest: main.problem.friction_bound([0.0; 3], 0.0, 0.0),
+        bound_at_rest: arrow_unit(&main.problem),
     };
     files.extend(figures::write(&profiles, dir)?);
 
