@@ -51,7 +51,7 @@ def test_scenario_files_load_with_their_mesh():
         ("material.poisson", 0.7, ["material.poisson", "0.7", "Poisson"]),
         ("mesh.nx", "many", ["mesh.nx", "many", "integer"]),
         ("boundary.contact", ["middle"], ["boundary.contact", "middle", "bottom"]),
-        ("friction.law", "coulomb", ["coulomb"]),
+        ("friction.law", "amontons", ["amontons", "coulomb"]),
         ("time.steps", -4, ["time.steps", "-4"]),
         ("loads.body_force", ["0", "-10*"], ["loads.body_force"]),
         ("mesh.nx", object(), ["mesh.nx", "TOML value"]),

@@ -628,11 +628,14 @@ impl Cursor<'_> {
 }
 
 /// The mesh as MSH 4.1 ASCII: one entity per boundary part with a physical group of that name
-/// (tags 1, 2, …); the cells on one entity per set of cell regions they are in (entity 1 first,
-/// the cells in none, without a physical group), each region a physical group of dimension d
-/// (tags after the parts'). Node tags are the indices + 1. Reading the text back with
-/// [`read_msh`] gives the same mesh, regions included (a mesh with regions comes back with its
-/// cells grouped by the regions they are in, in their order within each group).
+/// (tags 1, 2, …); the cells on one entity per set of cell regions they are in, each region a
+/// physical group of dimension d (tags after the parts'), and the cells in no region (entity 1)
+/// in a physical group `domain` (the last tag): every element has a physical group, as meshio
+/// and other readers expect (a mesh without regions gives the text of before regions existed).
+/// Node tags are the indices + 1. Reading the text back with [`read_msh`] gives the same mesh,
+/// regions included, plus a region `domain` of the cells that were in none (a mesh with regions
+/// comes back with its cells grouped by the regions they are in, in their order within each
+/// group).
 pub fn msh_text(mesh: &Mesh) -> String {
     let d = mesh.dim;
     let n_parts = mesh.part_names.len();
@@ -643,18 +646,24 @@ pub fn msh_text(mesh: &Mesh) -> String {
             in_regions[e as usize].push(n_parts + 1 + r);
         }
     }
+    let domain = n_parts + 1 + mesh.regions.len();
     let mut entities: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
     for (e, groups) in in_regions.into_iter().enumerate() {
         entities.entry(groups).or_default().push(e);
     }
+    let has_domain = entities.contains_key(&Vec::new());
     let mut s = String::new();
     let _ = writeln!(s, "$MeshFormat\n4.1 0 8\n$EndMeshFormat");
-    let _ = writeln!(s, "$PhysicalNames\n{}", n_parts + mesh.regions.len());
+    let n_physical = n_parts + mesh.regions.len() + usize::from(has_domain);
+    let _ = writeln!(s, "$PhysicalNames\n{n_physical}");
     for (k, name) in mesh.part_names.iter().enumerate() {
         let _ = writeln!(s, "{} {} \"{name}\"", d - 1, k + 1);
     }
     for (r, region) in mesh.regions.iter().enumerate() {
         let _ = writeln!(s, "{d} {} \"{}\"", n_parts + 1 + r, region.name);
+    }
+    if has_domain {
+        let _ = writeln!(s, "{d} {domain} \"domain\"");
     }
     let _ = writeln!(s, "$EndPhysicalNames");
     // Entities: no points; the parts' entities of dimension d − 1 and the cells' of dimension d.
@@ -667,6 +676,11 @@ pub fn msh_text(mesh: &Mesh) -> String {
         let _ = writeln!(s, "{} 0 0 0 0 0 0 1 {} 0", k + 1, k + 1);
     }
     for (k, groups) in entities.keys().enumerate() {
+        let groups = if groups.is_empty() {
+            vec![domain]
+        } else {
+            groups.clone()
+        };
         let tags: String = groups.iter().map(|g| format!(" {g}")).collect();
         let _ = writeln!(s, "{} 0 0 0 0 0 0 {}{tags} 0", k + 1, groups.len());
     }

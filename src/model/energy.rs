@@ -1,7 +1,7 @@
 //! The energies of one time step, from the states at t_{n−1} and t_n: what Abaqus users read as
 //! ALLKE, ALLSE, ALLVD, ALLFD and ALLWK, and the heat exchanged, each a figure a user can check.
 //!
-//! Depends on: [`super::problem`], [`super::state`], [`super::laws`], [`crate::la`].
+//! Depends on: [`super::Problem`], [`super::State`], [`super::ContactLaws`], [`crate::la`].
 //!
 //! **The mechanical balance (an identity of the scheme).** Step n of Problem 14 on full nodal
 //! vectors (u_n = u_{n−1} + k w_n, θ_n with θ_D at the fixed nodes) is

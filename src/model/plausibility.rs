@@ -1,7 +1,7 @@
 //! What makes a run implausible, as data the run's observers check step by step: the rigid
 //! motions the constraints leave free, and the temperatures the data make plausible.
 //!
-//! Depends on: [`super::problem`], [`crate::la::vector`].
+//! Depends on: [`super::Problem`], [`crate::la::vector`].
 //!
 //! **Rigid motions nothing holds.** The rigid motions of Ω (d translations, and d(d − 1)/2
 //! rotations about the centroid) that lie in E^h are not restrained by Γ_D, the symmetry planes

@@ -29,7 +29,7 @@
 //!   part not listed) is a Dirichlet node; its value is that of the first temperature part
 //!   listed that holds it, else the paper's θ_D;
 //! - a contact part takes no thermal condition (Γ_C has its own heat exchange law, the
-//!   builder's `heat_exchange`): [`ModelError::ThermalOnContact`];
+//!   builder's `heat_exchange`): [`super::ModelError::ThermalOnContact`];
 //! - a part listed twice is an error, and so are two listed parts sharing a facet (the facet's
 //!   flux would count twice).
 
