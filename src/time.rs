@@ -124,12 +124,9 @@ impl<'a> Levels<'a> {
             .since(self.setup_stats.get())
     }
 
-    /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]),
-    /// with the foundation's velocity at the contact nodes at t_n (zero at rest).
+    /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]).
     fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
-        let foundation =
-            crate::model::foundation_tangential(self.problem, state.t)?.unwrap_or_else(|| vec![0.0; state.xi.len()]);
-        Ok(crate::model::step_energy(self.problem, previous, state, &foundation)?)
+        Ok(crate::model::step_energy(self.problem, previous, state)?)
     }
 
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next

@@ -214,16 +214,10 @@ pub fn energy_levels(problem: &Problem, state: &State) -> (f64, f64, f64) {
     )
 }
 
-/// The energies of the step from `previous` to `state` (module docs), with the foundation's
-/// tangential velocity `foundation` at t_n at the contact nodes (node-major in their tangent
-/// coordinates, d − 1 per node; zeros for a foundation at rest). Ten sparse mat-vecs with the
+/// The energies of the step from `previous` to `state` (module docs), the friction's on the
+/// slip relative to the foundation at t_n ([`ContactLaws::slip`]). Ten sparse mat-vecs with the
 /// assembled matrices, the loads at t_n, and the laws on Γ_C once.
-pub fn step_energy(
-    problem: &Problem,
-    previous: &State,
-    state: &State,
-    foundation: &[f64],
-) -> Result<StepEnergy, Error> {
+pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result<StepEnergy, Error> {
     let k = state.t - previous.t;
     let mats = &problem.matrices;
     let (w, u, theta) = (&state.w, &state.u, &state.theta);
@@ -254,15 +248,16 @@ pub fn step_energy(
     // Friction on Γ_C, and the frictional heat it makes, on the relative slip.
     let laws = ContactLaws::of_state(problem, state)?;
     let td = problem.dim() - 1;
-    let w_tau = super::contact_tangential(problem, w);
+    let slip = laws.slip(w);
     let mut friction_heat = vec![0.0; problem.mesh.n_nodes()];
     for (i, node) in problem.contact.iter().enumerate() {
         let range = i * td..(i + 1) * td;
-        let (xi, v_f) = (&state.xi[range.clone()], &foundation[range.clone()]);
-        let slip: Vec<f64> = w_tau[range].iter().zip(v_f).map(|(a, b)| a - b).collect();
-        e.frictional -= k * node.weight * dot(xi, &slip);
-        e.foundation += k * node.weight * dot(xi, v_f);
-        friction_heat[node.node] = node.weight * laws.heat(i, norm2(&slip));
+        let (xi, slip) = (&state.xi[range.clone()], &slip[range.clone()]);
+        e.frictional -= k * node.weight * dot(xi, slip);
+        if let Some(v_f) = laws.foundation() {
+            e.foundation += k * node.weight * dot(xi, &v_f[range]);
+        }
+        friction_heat[node.node] = node.weight * laws.heat(i, norm2(slip));
     }
     e.residual = e.kinetic_change + e.elastic_change + e.numerical + e.viscous + e.frictional + e.thermal_stress
         - e.loads

@@ -112,9 +112,7 @@ impl<'p> ContactLaws<'p> {
     /// w_τ − v_F,τ in place: tangential velocities (node-major tangent coordinates) made
     /// relative to the foundation. Nothing happens where it is at rest.
     pub fn make_relative(&self, w_tau: &mut [f64]) {
-        if let Some(v) = &self.foundation {
-            w_tau.iter_mut().zip(v).for_each(|(w, v)| *w -= v);
-        }
+        subtract(w_tau, self.foundation.as_deref());
     }
 
     /// v_F,τ at the contact nodes (node-major tangent coordinates), `None` at rest.
@@ -125,7 +123,7 @@ impl<'p> ContactLaws<'p> {
     /// The relative slip w_τ − v_F,τ at the contact nodes of a full velocity vector.
     pub fn slip(&self, w_full: &[f64]) -> Vec<f64> {
         let mut w_tau = super::contact_tangential(self.problem, w_full);
-        self.make_relative(&mut w_tau);
+        subtract(&mut w_tau, self.foundation.as_deref());
         w_tau
     }
 
@@ -412,5 +410,20 @@ pub fn law_scale(bounds: impl IntoIterator<Item = f64>) -> f64 {
         smallest
     } else {
         f64::MIN_POSITIVE
+    }
+}
+
+/// The relative slip w_τ − v_F,τ(t) at the contact nodes of a full velocity vector, without the
+/// laws of a step (an invalid v_F, which fails the step's laws first, reads as at rest).
+pub fn relative_slip(problem: &Problem, w_full: &[f64], t: f64) -> Vec<f64> {
+    let mut w_tau = super::contact_tangential(problem, w_full);
+    subtract(&mut w_tau, foundation_tangential(problem, t).ok().flatten().as_deref());
+    w_tau
+}
+
+/// w −= v where the foundation moves (`Some`): nothing at rest, so the paper's bits stay.
+fn subtract(w_tau: &mut [f64], foundation: Option<&[f64]>) {
+    if let Some(v) = foundation {
+        w_tau.iter_mut().zip(v).for_each(|(w, v)| *w -= v);
     }
 }

@@ -30,7 +30,9 @@ pub mod thermal;
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 pub use energy::{step_energy, StepEnergy};
 pub use error::ModelError;
-pub use laws::{foundation_tangential, law_scale, ContactLaws, Friction, FrictionConstants, Heating, LawConstants};
+pub use laws::{
+    foundation_tangential, law_scale, relative_slip, ContactLaws, Friction, FrictionConstants, Heating, LawConstants,
+};
 pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;

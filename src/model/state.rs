@@ -36,12 +36,7 @@ impl State {
     /// (explicit: the step's law read s_{n−1}).
     pub fn accumulate_slip(&mut self, problem: &Problem, previous: &State) {
         let k = self.t - previous.t;
-        let mut w_tau = super::contact_tangential(problem, &self.w);
-        // The relative slip: v_F = 0 (the paper) subtracts nothing. An invalid v_F has failed
-        // the step's laws before this.
-        if let Ok(Some(v)) = super::foundation_tangential(problem, self.t) {
-            w_tau.iter_mut().zip(&v).for_each(|(w, v)| *w -= v);
-        }
+        let w_tau = super::relative_slip(problem, &self.w, self.t);
         let td = problem.dim() - 1;
         self.slip_distance_before = previous.slip_distance.clone();
         // An empty `previous.slip_distance` (a checkpoint older than it) reads as zeros.
