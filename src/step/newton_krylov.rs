@@ -43,6 +43,29 @@
 //!   iterates and then converges in 6. Stopping those too cut Newton iterations 345 → 169 and
 //!   raised cutbacks (to k/8, and one more step cut back): 10.9 s → 10.8 s, and other states.
 //!
+//! Measured for issue 28 (3D example, nx × nx/4 × nx/4 cells, k = 1/64 unless said; iteration
+//! counts, which do not depend on the machine's load):
+//! - semismooth Newton on the nonmonotone law itself (b′ in the slip rows, the bounds at each
+//!   iterate), from the step's start, this loop where it fails: at 47k it cycles with period 2
+//!   from its 22nd iteration (the law's residual 1.58 ↔ 2.13) in the first step, so the first
+//!   two steps take 41 and 36 Newton iterations instead of 11 and 6;
+//! - under-relaxing the bound update, g ← ω b(|w|) + (1 − ω) g, ω halved (down to 1/16) each
+//!   time 10 iterates pass without halving the law's residual: at 47k and k = 1/8 two steps
+//!   are cut back (to k/8) instead of one (to k/2);
+//! - stopping on the residual alone (the nonmonotone law at an iterate whose linear equations
+//!   hold) without the increments: 6.25 → 5.5 Newton iterations per step at 47k, 7.5 → 6.75 at
+//!   98k, with the same Krylov iterations (the confirming iterate's warm-started solve costs
+//!   almost none), so no time, and fields that move by the tolerance;
+//! - every convex problem solved to 10⁻¹⁰ instead of the adaptive tolerance: the period-6 cycle
+//!   of step 3 at 47k and k = 1/8 stays (391 Newton iterations instead of 262, the same cutback),
+//!   as it does with the frictional heat off.
+//!
+//! What the iterations follow is the slip front: a node that starts slipping keeps its frozen
+//! static bound for that iterate, and its neighbours see its weakened bound only in the next,
+//! so the front advances about one ring of nodes per iterate (291k, the step where the slip
+//! zone grows from 235 to 460 nodes: 7 iterates at a law residual near 2, then 5 converging
+//! 50–100× each). docs/performance.md has the analysis.
+//!
 //! **Rejected.** Condensing matrix-free (C v by one Krylov solve per product) would cost a solve
 //! per product of the convexification loop's inner iterations (hundreds per step); the fast
 //! solver's descent needs K = C⁻¹, dense. Newton on the nonmonotone law itself (with the slope
