@@ -56,9 +56,11 @@
 //!   hold) without the increments: 6.25 → 5.5 Newton iterations per step at 47k, 7.5 → 6.75 at
 //!   98k, with the same Krylov iterations (the confirming iterate's warm-started solve costs
 //!   almost none), so no time, and fields that move by the tolerance;
-//! - every convex problem solved to 10⁻¹⁰ instead of the adaptive tolerance: the period-6 cycle
-//!   of step 3 at 47k and k = 1/8 stays (391 Newton iterations instead of 262, the same cutback),
-//!   as it does with the frictional heat off.
+//! - every convex problem solved to 10⁻¹⁰ instead of the adaptive tolerance: the crawl of step
+//!   3 at 47k and k = 1/8 (its criteria repeating with a period of about 6 for 200 iterates)
+//!   stays, 391 Newton iterations instead of 262 and the same cutback, as it does with the
+//!   frictional heat off: the loop (a majorize–minimize method for the energy of
+//!   [`super::descent`]) descends along a flat valley there; a faster descent would move it.
 //!
 //! What the iterations follow is the slip front: a node that starts slipping keeps its frozen
 //! static bound for that iterate, and its neighbours see its weakened bound only in the next,
