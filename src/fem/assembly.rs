@@ -1,6 +1,12 @@
 //! Global assembly: scatter element kernels into matrices whose pattern comes from the node
 //! graph, and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature
 //! dof p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
+//!
+//! The sweep adds each cell's kernels at positions known from the node graph: one search for a
+//! node pair's place in its column serves the eight matrices ([`CscMatrix::from_graph`]'s
+//! layout). A binary search per entry (39 per node pair in 3D) took 40 % of the CPU time of a
+//! one-step run of the 3D example at 291k unknowns (`perf record`); without it the assembly takes
+//! 5.3–10 s against 14–26 s before, interleaved on the same loaded machine (docs/performance.md).
 
 use rayon::prelude::*;
 

@@ -97,7 +97,7 @@ pub fn assemble_by_columns(
 
 /// Rows of P A Pᵀ (row and column i are unknown `order[i]`) with the right-hand side's data:
 /// the columns of [`assemble_by_columns`], row j negated where `order[j]` is a temperature
-/// unknown. The rows are summed in rounds of one block of [`ROWS_PER_BLOCK`] consecutive rows
+/// unknown. The rows are summed in rounds of one block of 4096 (`ROWS_PER_BLOCK`) consecutive rows
 /// per thread, each block appended to A in order once the round is done; each row is summed
 /// alone in the same order as by [`assemble_by_columns`]: the same bits on any number of
 /// threads. The blocks of a round are all the memory beyond A and the columns' scratch (a copy
@@ -143,9 +143,9 @@ fn ordered_rows_in_blocks(problem: &Problem, k: f64, order: &[usize], rows_per_b
     (CsrMatrix::from_rows(n, ptr, col, val), source.rhs())
 }
 
-/// Rows of one thread's block in [`ordered_rows`]: ≈ 12 MB of A in 3D, small against A and
+/// Rows of one thread's block in [`ordered_rows`]: ≈ 3 MB of A in 3D, small against A and
 /// large against a round's scheduling.
-const ROWS_PER_BLOCK: usize = 16_384;
+const ROWS_PER_BLOCK: usize = 4096;
 
 /// What a column of the step matrix is summed from: the θ_D lift (done once), Pᵀ by unknowns,
 /// G by rows and the place of each unknown in the ordering.
@@ -541,7 +541,7 @@ mod tests {
         let (k, n_w) = (problem.time_step(), problem.velocity.n_free);
         let n = n_w + problem.temperature.n_free;
         let order: Vec<usize> = (0..n).map(|i| (i * 7919) % n).collect();
-        assert!(n % 7919 != 0, "a permutation");
+        assert!(!n.is_multiple_of(7919), "a permutation");
         let mut columns = Vec::new();
         assemble_by_columns(&problem, k, &order, |column| columns.push(column.to_vec()));
         assert_eq!(columns.len(), n);
