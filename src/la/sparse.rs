@@ -29,11 +29,15 @@ pub struct CscMatrix {
 
 impl CscMatrix {
     /// Zero matrix over nodal blocks (`rows_per_node`, `cols_per_node`) with the pattern of
-    /// `graph`.
+    /// `graph`: row p·r + i of column q·c + j (r, c the rows and columns per node) is the
+    /// column's entry k·r + i, k the place of p among q's sorted neighbours, so that an assembly
+    /// finds a node pair's entries in every such matrix with one search
+    /// ([`ColumnsMut::add_at`]).
     pub fn from_graph(graph: &NodeGraph, rows_per_node: usize, cols_per_node: usize) -> Self {
         let n = graph.n_nodes();
         let mut col_ptr = Vec::with_capacity(n * cols_per_node + 1);
-        let mut row_idx = Vec::new();
+        let pairs: usize = (0..n).map(|q| graph.neighbours(q).len()).sum();
+        let mut row_idx = Vec::with_capacity(pairs * rows_per_node * cols_per_node);
         col_ptr.push(0);
         for q in 0..n {
             for _ in 0..cols_per_node {
@@ -50,6 +54,17 @@ impl CscMatrix {
             col_ptr: col_ptr.into(),
             row_idx: row_idx.into(),
             values: vec![0.0; nnz],
+        }
+    }
+
+    /// A zero matrix with this one's (shared) pattern.
+    pub fn zeros_like(&self) -> Self {
+        CscMatrix {
+            n_rows: self.n_rows,
+            n_cols: self.n_cols,
+            col_ptr: Arc::clone(&self.col_ptr),
+            row_idx: Arc::clone(&self.row_idx),
+            values: vec![0.0; self.values.len()],
         }
     }
 
@@ -118,7 +133,6 @@ impl CscMatrix {
                 taken = end;
                 ColumnsMut {
                     col_ptr: &self.col_ptr,
-                    row_idx: &self.row_idx,
                     values,
                     offset,
                 }
@@ -197,21 +211,20 @@ impl CscMatrix {
 #[derive(Debug)]
 pub struct ColumnsMut<'a> {
     col_ptr: &'a [usize],
-    row_idx: &'a [usize],
     values: &'a mut [f64],
     /// Position in the matrix's `values` of `values[0]`.
     offset: usize,
 }
 
 impl ColumnsMut<'_> {
-    /// Adds `value` at (row, col); col must be in the range and the entry in the pattern.
+    /// Adds `value` to the `entry`-th stored entry of column `col` (in the range): what
+    /// [`CscMatrix::add`] does with the row's place known, not searched
+    /// ([`CscMatrix::from_graph`] gives it by node).
     #[inline]
-    pub fn add(&mut self, row: usize, col: usize, value: f64) {
-        let (start, end) = (self.col_ptr[col], self.col_ptr[col + 1]);
-        let k = self.row_idx[start..end]
-            .binary_search(&row)
-            .expect("entry outside the assembled pattern");
-        self.values[start + k - self.offset] += value;
+    pub fn add_at(&mut self, col: usize, entry: usize, value: f64) {
+        let k = self.col_ptr[col] + entry;
+        debug_assert!(k < self.col_ptr[col + 1], "entry {entry} past column {col}");
+        self.values[k - self.offset] += value;
     }
 }
 

@@ -37,6 +37,6 @@ pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{
-    assemble_by_columns, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
+    assemble_by_columns, ordered_rows, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
 };
 pub use thermal::{ThermalBoundary, ThermalCondition};

@@ -29,7 +29,7 @@ use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, 
 use crate::la::{
     gmres_from_residual, level_bisection, CsrMatrix, FactorStage, Ilu0, LaError, NodeGraph, Part, SolveInfo,
 };
-use crate::model::{assemble_by_columns, Problem, State, StepRhs};
+use crate::model::{ordered_rows, Problem, State, StepRhs};
 
 /// The rows of one contact node in the iterative path's ordering.
 #[derive(Debug, Clone)]
@@ -90,8 +90,7 @@ fn sweep_order(problem: &Problem) -> (Vec<usize>, [usize; 2], usize) {
             *w += usize::from(!is_contact[r]);
         }
     }
-    let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
-    let part = level_bisection(&graph, &weight);
+    let part = level_bisection(&NodeGraph::of_nodal_matrix(&problem.matrices.heat_mass), &weight);
     let (is_contact, part, node_of) = (&is_contact, &part, &node_of);
     let in_part = |x: Part| (0..n).filter(move |&r| !is_contact[r] && part[node_of[r]] == x);
     let first = in_part(Part::First).count();
@@ -130,7 +129,7 @@ fn ilu_needs_amg(
 
 impl KrylovSystem {
     /// Assembles the step matrix of step size k in the order with the Γ_C tangential
-    /// velocities last, as A's rows (no symmetric form, no triplets: [`assemble_by_columns`]),
+    /// velocities last, as A's rows (no symmetric form, no triplets: [`ordered_rows`]),
     /// and factors its ILU(0).
     pub fn new(problem: &Problem, k: f64, params: KrylovParams) -> Result<Self, StepError> {
         let n_w = problem.velocity.n_free;
@@ -146,19 +145,7 @@ impl KrylovSystem {
         let mut position = vec![0; n];
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
 
-        // Row j of P A Pᵀ is column j of P S Pᵀ, negated for a temperature unknown.
-        let mut ptr = Vec::with_capacity(n + 1);
-        let (mut col, mut val) = (Vec::new(), Vec::new());
-        ptr.push(0);
-        let mut j = 0;
-        let rhs = assemble_by_columns(problem, k, &order, |column| {
-            let sign = if order[j] < n_w { 1.0 } else { -1.0 };
-            col.extend(column.iter().map(|&(c, _)| c as u32));
-            val.extend(column.iter().map(|&(_, v)| sign * v));
-            ptr.push(col.len());
-            j += 1;
-        });
-        let a = CsrMatrix::from_rows(n, ptr, col, val);
+        let (a, rhs) = ordered_rows(problem, k, &order);
         let base = a.values_from(first_contact).to_vec();
         let nodes = (problem.contact.iter())
             .map(|node| {
