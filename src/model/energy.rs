@@ -331,7 +331,13 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
     let (m, a, b) = (&mats.mass, &mats.viscosity, &mats.elasticity);
     let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] =
         if same_pattern(m, a) && same_pattern(m, b) {
-            let gathers = [(&m.values[..], w), (&m.values, dw), (&a.values, w), (&b.values, u), (&b.values, du)];
+            let gathers = [
+                (&m.values[..], w),
+                (&m.values, dw),
+                (&a.values, w),
+                (&b.values, u),
+                (&b.values, du),
+            ];
             column_forms(m, gathers, [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)])
         } else {
             let [mw, mdw, dmd] = column_forms(m, [(&m.values[..], w), (&m.values, dw)], [(0, w), (0, dw), (1, dw)]);
@@ -371,12 +377,12 @@ fn column_forms<const G: usize, const F: usize>(
     let block = |first: usize| {
         let mut sums = [0.0; F];
         for c in first..(first + BLOCK).min(n) {
-            let range = col_ptr[c]..col_ptr[c + 1];
-            let rows = &row_idx[range.clone()];
+            // The G sums side by side: independent chains of multiply-adds (one sum after
+            // the other waits on each add, and was slower than the separate mat-vecs).
             let mut column = [0.0; G];
-            for (s, (values, y)) in column.iter_mut().zip(&gathers) {
-                for (v, &r) in values[range.clone()].iter().zip(rows) {
-                    *s += v * y[r];
+            for (k, &r) in (col_ptr[c]..col_ptr[c + 1]).zip(&row_idx[col_ptr[c]..col_ptr[c + 1]]) {
+                for (s, (values, y)) in column.iter_mut().zip(&gathers) {
+                    *s += values[k] * y[r];
                 }
             }
             for (sum, &(g, x)) in sums.iter_mut().zip(&forms) {
@@ -385,7 +391,12 @@ fn column_forms<const G: usize, const F: usize>(
         }
         sums
     };
-    let blocks: Vec<[f64; F]> = (0..n).step_by(BLOCK).collect::<Vec<_>>().into_par_iter().map(block).collect();
+    let blocks: Vec<[f64; F]> = (0..n)
+        .step_by(BLOCK)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(block)
+        .collect();
     blocks.iter().fold([0.0; F], |mut total, sums| {
         total.iter_mut().zip(sums).for_each(|(t, s)| *t += s);
         total
