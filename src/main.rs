@@ -948,6 +948,7 @@ fn print_summary(s: &Summary) {
         println!("{:<34} {:>10.3} s", "  cutback levels set-up", t.cutback_setup);
     }
     println!("{:<34} {:>10.3} s", "  nonsmooth solver on Γ_C", t.contact_solver);
+    println!("{:<34} {:>10.3} s", "  energies", t.energies);
     println!("{:<34} {:>10.3} s", "output (waited for)", t.output);
     println!("{:<34} {:>10.3} s", "  frames (writer thread)", t.frames);
     println!("{:<34} {:>10.3} s", "wall time", t.total);

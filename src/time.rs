@@ -57,6 +57,8 @@ pub struct Levels<'a> {
     setup_seconds: Cell<f64>,
     /// The work of all levels' set-up (condensation solves), level 0's included.
     setup_stats: Cell<SystemStats>,
+    /// Seconds spent on the steps' energies ([`crate::model::energy`]).
+    energy_seconds: Cell<f64>,
 }
 
 impl<'a> Levels<'a> {
@@ -72,6 +74,7 @@ impl<'a> Levels<'a> {
             levels,
             setup_seconds: Cell::new(0.0),
             setup_stats,
+            energy_seconds: Cell::new(0.0),
         }
     }
 
@@ -108,6 +111,11 @@ impl<'a> Levels<'a> {
         self.setup_seconds.get()
     }
 
+    /// Seconds spent so far on the steps' energies.
+    pub fn energy_seconds(&self) -> f64 {
+        self.energy_seconds.get()
+    }
+
     /// The solver of the problem's own step size.
     pub fn first(&self) -> &StepSolver<'a> {
         self.levels[0].get().expect("level 0 is set at construction")
@@ -126,7 +134,11 @@ impl<'a> Levels<'a> {
 
     /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]).
     fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
-        Ok(crate::model::step_energy(self.problem, previous, state)?)
+        let clock = Instant::now();
+        let energy = crate::model::step_energy(self.problem, previous, state);
+        self.energy_seconds
+            .set(self.energy_seconds.get() + clock.elapsed().as_secs_f64());
+        Ok(energy?)
     }
 
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next

@@ -170,8 +170,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
         timings.linear_solves = stats.solve_seconds;
         timings.right_hand_sides = stats.rhs_seconds;
         timings.cutback_setup = self.levels.cutback_setup_seconds();
-        timings.contact_solver =
-            timings.time_stepping - timings.linear_solves - timings.right_hand_sides - timings.cutback_setup;
+        timings.energies = self.levels.energy_seconds();
+        timings.contact_solver = timings.time_stepping
+            - timings.linear_solves
+            - timings.right_hand_sides
+            - timings.cutback_setup
+            - timings.energies;
     }
 
     /// The seconds spent on the frames themselves (on the writer's thread, or inline).

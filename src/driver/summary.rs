@@ -32,6 +32,8 @@ pub struct Timings {
     /// Of which: setting up the cutback levels k/2, k/4, … (factorization and condensation)
     /// when a cutback first needs them.
     pub cutback_setup: f64,
+    /// Of which: the energies of each step (`crate::model::energy`).
+    pub energies: f64,
     /// Of which: the nonsmooth solver on Γ_C and bookkeeping (the rest).
     pub contact_solver: f64,
     /// Writing files, as far as the run waited for it: the frames are written on a thread

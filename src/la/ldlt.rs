@@ -43,6 +43,17 @@
 //! in 2D, 12 s in 3D per set-up) and two full solves per step; a simplicial factor, whose
 //! trailing block is easier to read but whose numeric factorization is 4–8× slower
 //! (docs/linear-algebra-study.md).
+//!
+//! **Rejected: L in single precision with iterative refinement.** A copy of L in f32 (D, the
+//! vectors and the sums in f64) swept by the same loops, refined against S in f64
+//! (x ← x + S̃⁻¹(J b − S x)). Measured on the 2D reference step matrix (49 344 unknowns,
+//! 6.2 M entries in L; the two right-hand sides of step 1 and of S x for a rough x; release
+//! build, a loaded machine, both variants in one process): a split solve 62.8–63.8 ms in f64,
+//! 41.8–43.6 ms with L in f32 (0.67×: the sweeps are not purely bandwidth-bound), a mat-vec
+//! with S 4.7–5.4 ms. The f32 solve alone is 2–6e-8 off the f64 solution (relative, ∞-norm),
+//! so every solve needs one refinement (after it 3–4e-15, as the f64 solve; a second gains
+//! nothing): two f32 solves and a mat-vec are 1.41× the f64 solve. On a machine where the
+//! sweeps were purely bandwidth-bound (f32 at 0.5×) it would still be 1.1×.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
