@@ -203,6 +203,8 @@ fn auto_picks_the_path_by_its_estimated_cost() {
     let cases = [
         // Compact bodies: the 2D reference run, the 3D example at two sizes, the brake pad.
         (Auto, size(2, 12_384, 128, 64), Fast, 24.0, Direct),
+        (Auto, size(2, 12_384, 128, 16), Fast, 24.0, Direct),
+        (Auto, size(2, 7_611, 316, 60), Fast, 24.0, Direct),
         (Auto, size(2, 49_344, 256, 64), Fast, 24.0, Direct),
         (Auto, size(3, 17_590, 440, 64), Fast, 24.0, Direct),
         (Auto, size(3, 46_970, 840, 64), Fast, 24.0, Direct),

@@ -3,9 +3,9 @@
 //!
 //! At 291k unknowns one step took 95 s with no line printed: the driver's lines come between
 //! steps. The outer loops (`convexification::convexify`, the fixed point on the contact pressure
-//! in `select`) call [`outer`] once per iteration, right after their criteria are computed. Like
+//! in `select`) call `outer` once per iteration, right after their criteria are computed. Like
 //! [`super::abort`], the sink is current *on the driver's thread* for the time of its march
-//! ([`report_to`]); without one (tests, studies, a Python caller) [`outer`] returns at once. With
+//! ([`report_to`]); without one (tests, studies, a Python caller) `outer` returns at once. With
 //! one, it costs a clock read and a comparison per outer iteration (tens of nanoseconds, against
 //! at least one linear solve per iteration): the line is formatted only when it is due.
 //!

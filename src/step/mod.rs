@@ -201,9 +201,11 @@ impl LinearKind {
     /// × contact nodes): the direct path's nonsmooth iterations are dense products with C.
     pub const AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY: f64 = 1e-8;
 
-    /// Seconds per outer iteration per factor entry in 2D, where the direct path's outer
-    /// iterations each take a sparse solve with the factor (in 3D they stay on Γ_C).
-    pub const AUTO_DIRECT_SECONDS_PER_SOLVE_ENTRY_2D: f64 = 3e-9;
+    /// Seconds per step per n_t³ in 2D, where the direct path's fast solver starts each step
+    /// with Newton on the condensed law: a dense n_t × n_t LU per iteration, up to 8 (measured
+    /// on the strip 2048 × 4: 8 per step, 27.6 s per step; in 3D the descent's sweeps take
+    /// their place, and α n_t² covers them).
+    pub const AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D: f64 = 3.2e-9;
 
     /// Seconds per outer iteration per unknown of the iterative path (its Newton iterations'
     /// GMRES + ILU(0) solves; its set-up is a tenth of the direct path's and left out).
@@ -225,7 +227,7 @@ impl LinearKind {
     /// F         = F_sparse(d, N) + (d n_c)² / 2          the factor's entries: the sparse fill
     ///                                                   (crate::resources) and the dense block of
     ///                                                   the contact unknowns, ordered last
-    /// direct    = φ F + S I (α n_t² + [d = 2] σ F)
+    /// direct    = φ F + S I α n_t² + [d = 2] S ν n_t³
     /// iterative = S I β N
     /// ```
     pub fn costs(size: &ProblemSize) -> PathCosts {
@@ -235,15 +237,16 @@ impl LinearKind {
         let n_t = (d - 1.0) * contact;
         let factor = crate::resources::estimated_factor_entries(size.dim, n) + (d * contact).powi(2) / 2.0;
         let outer = size.steps as f64 * Self::AUTO_OUTER_PER_STEP;
-        let solves = if size.dim < 3 {
-            Self::AUTO_DIRECT_SECONDS_PER_SOLVE_ENTRY_2D * factor
+        let newton = if size.dim < 3 {
+            Self::AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D * n_t.powi(3)
         } else {
             0.0
         };
         PathCosts {
             factor_entries: factor,
             direct: Self::AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY * factor
-                + outer * (Self::AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY * n_t * n_t + solves),
+                + outer * Self::AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY * n_t * n_t
+                + size.steps as f64 * newton,
             iterative: outer * Self::AUTO_ITERATIVE_SECONDS_PER_UNKNOWN * n,
         }
     }
@@ -281,11 +284,11 @@ impl LinearKind {
     /// | strip 40 × 2.5 (512 × 4) | 2 | 6 652 | 512 | 2.5 | 2.2 | 72 / 17 |
     /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 477 | 85 | 910 / 51 |
     ///
-    /// φ, α, σ, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
+    /// φ, α, ν, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
     /// bodies, β N 1.2–2.2 µs per unknown). On a machine without that load the iterative path
     /// is about 2× faster against the direct one than in the table, so the rule leans to the
-    /// direct path where the two are close (the strip 512 × 4, the 3D example at 47k and 64
-    /// steps: direct). The paper's solver takes the direct path wherever its factor fits: on
+    /// direct path where the two are close (the 3D example at 47k and 64 steps: direct; the
+    /// strip 512 × 4, a tie in the table, goes iterative by its Newton term). The paper's solver takes the direct path wherever its factor fits: on
     /// the iterative path it pays a Krylov solve per Uzawa iterate ([`PaperKrylov`]).
     /// `size.contact_nodes = 0` (not known yet: the scenario's memory check before the mesh)
     /// leaves the unknowns to decide, as before the cost model.
