@@ -209,6 +209,7 @@ fn auto_picks_the_path_by_its_estimated_cost() {
         (Auto, size(3, 17_590, 440, 64), Fast, 24.0, Direct),
         (Auto, size(3, 46_970, 840, 64), Fast, 24.0, Direct),
         (Auto, size(3, 6_978, 384, 60), Fast, 24.0, Direct),
+        (Auto, size(3, 6_978, 384, 3), Fast, 24.0, Direct),
         // Thin pads and strips: 15–17 % of the nodes on Γ_C in 3D (the report of issue 28: 31k
         // unknowns, 30 steps), a strip of 4 cells in 2D.
         (Auto, size(3, 27_025, 1_260, 64), Fast, 24.0, Iterative),

@@ -212,10 +212,13 @@ impl LinearKind {
     pub const AUTO_ITERATIVE_SECONDS_PER_UNKNOWN: f64 = 2e-6;
 
     /// An estimated direct run shorter than this takes the direct path whatever the iterative
-    /// one's estimate: below a second the model does not tell the paths apart (set-up and
-    /// per-step overheads it leaves out dominate), and the direct path is the reference (it
-    /// reports the uniqueness condition).
-    pub const AUTO_DIRECT_ANYWAY_SECONDS: f64 = 1.0;
+    /// one's estimate: the saving would be a few seconds at most, the model leaves out the
+    /// set-up and per-step overheads that dominate small runs, and the direct path is the
+    /// robust one and the reference (it reports the uniqueness condition). The iterative path's
+    /// ILU(0) may stall on a stiff body of several materials: the 3D brake (steel backplate and
+    /// lining, 6 978 unknowns, 384 contact nodes) in 3 steps is estimated 1.5 s direct against
+    /// 0.4 s iterative, and there GMRES reaches its cap at a relative residual of 2e-9.
+    pub const AUTO_DIRECT_ANYWAY_SECONDS: f64 = 5.0;
 
     /// The estimated cost of a whole run of `size` on each path, in seconds of this machine
     /// (the constants `AUTO_*` of [`LinearKind`]; the measurements in [`LinearKind::choose`]).
@@ -285,11 +288,13 @@ impl LinearKind {
     /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 477 | 85 | 910 / 51 |
     ///
     /// φ, α, ν, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
-    /// bodies, β N 1.2–2.2 µs per unknown). On a machine without that load the iterative path
-    /// is about 2× faster against the direct one than in the table, so the rule leans to the
-    /// direct path where the two are close (the 3D example at 47k and 64 steps: direct; the
-    /// strip 512 × 4, a tie in the table, goes iterative by its Newton term). The paper's solver takes the direct path wherever its factor fits: on
-    /// the iterative path it pays a Krylov solve per Uzawa iterate ([`PaperKrylov`]).
+    /// bodies, β N 1.2–2.2 µs per unknown). The load slows the iterative path (memory-bound)
+    /// more than the direct one (at 47k, 0.63 s per step here against 0.04–0.06 s on the idle
+    /// machine of `bench --3d`), so on an idle machine the rule leans to the direct path where
+    /// the two are close (the 3D example at 47k and 64 steps: direct; the strip 512 × 4, a tie
+    /// in the table, goes iterative by its Newton term). The paper's solver takes the direct
+    /// path wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa
+    /// iterate ([`PaperKrylov`]).
     /// `size.contact_nodes = 0` (not known yet: the scenario's memory check before the mesh)
     /// leaves the unknowns to decide, as before the cost model.
     pub fn choose(self, size: &ProblemSize, kind: SolverKind, memory: f64) -> LinearChoice {
@@ -326,7 +331,7 @@ impl LinearKind {
             "auto: estimated {:.2} s direct (factor {:.1e} entries, {} contact unknowns) against {:.2} s iterative",
             costs.direct,
             costs.factor_entries,
-            (size.dim - 1) * size.contact_nodes,
+            size.dim.saturating_sub(1) * size.contact_nodes,
             costs.iterative
         );
         chosen(linear, reason)
