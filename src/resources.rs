@@ -27,16 +27,23 @@ pub fn estimated_memory_iterative(unknowns: f64) -> f64 {
     32.0 * (1u64 << 20) as f64 + ITERATIVE_BYTES_PER_UNKNOWN * unknowns
 }
 
-/// Estimated peak memory of a run on the direct path with `unknowns` unknowns in `dim`
-/// dimensions, bytes.
-pub fn estimated_memory(dim: usize, unknowns: f64) -> f64 {
+/// Estimated entries of the direct LDLᵀ factor of a step matrix with `unknowns` unknowns in
+/// `dim` dimensions, on a compact body (the fill of the sparse part; the dense block of the
+/// contact unknowns that the direct path orders last comes on top: `crate::step::LinearKind`).
+pub fn estimated_factor_entries(dim: usize, unknowns: f64) -> f64 {
     let per_unknown = if dim == 3 {
         1300.0 * (unknowns / 47_000.0).cbrt()
     } else {
         126.0 * (unknowns / 49_000.0).max(1e-6).powf(0.1)
     };
+    per_unknown * unknowns
+}
+
+/// Estimated peak memory of a run on the direct path with `unknowns` unknowns in `dim`
+/// dimensions, bytes.
+pub fn estimated_memory(dim: usize, unknowns: f64) -> f64 {
     // Small problems: the process itself and the mesh.
-    32.0 * (1u64 << 20) as f64 + BYTES_PER_ENTRY * per_unknown * unknowns
+    32.0 * (1u64 << 20) as f64 + BYTES_PER_ENTRY * estimated_factor_entries(dim, unknowns)
 }
 
 /// The machine's memory (Linux: `MemTotal` of /proc/meminfo), bytes.

@@ -456,3 +456,50 @@ fn results_do_not_depend_on_the_thread_count() {
         }
     }
 }
+
+/// A step that runs longer than the heartbeat's threshold reports its outer iterations on a
+/// non-terminal stderr (the batch lines' stream); `THERMOCONTACT_HEARTBEAT_SECONDS=0` forces the
+/// threshold to zero, so every iteration of this tiny run reports. Without it (threshold 3 s),
+/// or with `--quiet`, the short run prints no such line. The header names the linear path and
+/// why `auto` took it.
+#[test]
+fn long_steps_report_their_outer_iterations_and_the_header_names_the_linear_path() {
+    let run = |tag: &str, forced: bool, quiet: bool| {
+        let out = scratch(tag);
+        let mut command = bin();
+        command.args([
+            "run",
+            "--set",
+            "mesh.nx=16",
+            "--set",
+            "mesh.ny=4",
+            "--set",
+            "time.steps=2",
+            "--out",
+        ]);
+        command.arg(&out);
+        if quiet {
+            command.arg("--quiet");
+        }
+        if forced {
+            command.env("THERMOCONTACT_HEARTBEAT_SECONDS", "0");
+        } else {
+            command.env_remove("THERMOCONTACT_HEARTBEAT_SECONDS");
+        }
+        let result = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr).to_string();
+        assert!(result.status.success(), "{stderr}");
+        (String::from_utf8_lossy(&result.stdout).to_string(), stderr)
+    };
+    let beats = |stderr: &str| stderr.lines().filter(|l| l.starts_with("  step ")).count();
+    let (stdout, stderr) = run("heartbeat", true, false);
+    assert!(
+        stderr.contains("  step 1 (t = 0.5): convexification iteration 1, ")
+            && stderr.contains("  step 2 (t = 1): convexification iteration 1, "),
+        "{stderr}"
+    );
+    assert!(stderr.contains(" (tolerance 1.0e-6), "), "{stderr}");
+    assert!(stdout.contains("linear path: direct (auto: estimated "), "{stdout}");
+    assert_eq!(beats(&run("heartbeat-default", false, false).1), 0);
+    assert_eq!(beats(&run("heartbeat-quiet", true, true).1), 0);
+}

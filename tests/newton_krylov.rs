@@ -181,40 +181,90 @@ fn krylov_iterations_stay_bounded_under_refinement() {
     );
 }
 
-/// `auto` is direct in 2D, and in 3D up to 70 000 unknowns where the direct factor fits in half
-/// the machine's memory, iterative beyond; the paper's solver takes the direct path wherever its
-/// factor fits.
+/// `auto` takes the path whose estimated run is cheaper: direct on compact bodies (the 2D and 3D
+/// examples, the brake pads), iterative on thin pads and strips whose contact nodes make the
+/// direct path's dense condensation on Γ_C the larger cost; in 3D never direct beyond 70 000
+/// unknowns nor where the direct factor does not fit in half the machine's memory; the paper's
+/// solver takes the direct path wherever its factor fits.
 #[test]
-fn auto_picks_the_path_by_size_and_memory() {
-    use thermocontact::step::{LinearKind, SolverKind};
+fn auto_picks_the_path_by_its_estimated_cost() {
+    use thermocontact::step::{LinearKind, ProblemSize, SolverKind};
     use LinearKind::{Auto, Direct, Iterative};
     use SolverKind::{Fast, Paper};
     let gib = (1u64 << 30) as f64;
-    // (requested, dimension, unknowns, solver, machine memory in GiB) → path.
+    let size = |dim, unknowns, contact_nodes, steps| ProblemSize {
+        dim,
+        unknowns,
+        contact_nodes,
+        steps,
+    };
+    // (requested, size, solver, machine memory in GiB) → path. The sizes are those of the
+    // measurements in `LinearKind::choose`.
     let cases = [
-        (Auto, 2, 10_000_000, Fast, 24.0, Direct),
-        (Auto, 3, 46_970, Fast, 24.0, Direct),
-        (Auto, 3, 98_334, Fast, 24.0, Iterative),
-        (Auto, 3, 46_970, Fast, 0.5, Iterative),
-        (Auto, 3, 972_270, Fast, 24.0, Iterative),
-        (Auto, 3, 98_334, Fast, 2.0, Iterative),
-        // The paper's solver pays a Krylov solve per Uzawa iterate on the iterative path:
-        // direct wherever the factor fits, iterative beyond.
-        (Auto, 3, 98_334, Paper, 24.0, Direct),
-        (Auto, 3, 972_270, Paper, 24.0, Iterative),
-        (Direct, 3, 972_270, Fast, 24.0, Direct),
+        // Compact bodies: the 2D reference run, the 3D example at two sizes, the brake pad.
+        (Auto, size(2, 12_384, 128, 64), Fast, 24.0, Direct),
+        (Auto, size(2, 12_384, 128, 16), Fast, 24.0, Direct),
+        (Auto, size(2, 7_611, 316, 60), Fast, 24.0, Direct),
+        (Auto, size(2, 49_344, 256, 64), Fast, 24.0, Direct),
+        (Auto, size(3, 17_590, 440, 64), Fast, 24.0, Direct),
+        (Auto, size(3, 46_970, 840, 64), Fast, 24.0, Direct),
+        (Auto, size(3, 6_978, 384, 60), Fast, 24.0, Direct),
+        (Auto, size(3, 6_978, 384, 3), Fast, 24.0, Direct),
+        // Thin pads and strips: 15–17 % of the nodes on Γ_C in 3D (the report of issue 28: 31k
+        // unknowns, 30 steps), a strip of 4 cells in 2D.
+        (Auto, size(3, 27_025, 1_260, 64), Fast, 24.0, Iterative),
+        (Auto, size(3, 31_000, 1_160, 30), Fast, 24.0, Iterative),
+        (Auto, size(2, 26_620, 2_048, 16), Fast, 24.0, Iterative),
+        // Size and memory, as before the cost model.
+        (Auto, size(2, 10_000_000, 0, 64), Fast, 24.0, Direct),
+        (Auto, size(3, 46_970, 840, 64), Fast, 0.5, Iterative),
+        (Auto, size(3, 98_334, 1_387, 64), Fast, 24.0, Iterative),
+        (Auto, size(3, 972_270, 0, 64), Fast, 24.0, Iterative),
+        (Auto, size(3, 98_334, 1_387, 64), Paper, 24.0, Direct),
+        (Auto, size(3, 27_025, 1_260, 64), Paper, 24.0, Direct),
+        (Auto, size(3, 972_270, 0, 64), Paper, 24.0, Iterative),
+        (Direct, size(3, 972_270, 0, 64), Fast, 24.0, Direct),
+        (Iterative, size(2, 12_384, 128, 64), Fast, 24.0, Iterative),
     ];
-    for (requested, dim, unknowns, kind, memory, expected) in cases {
+    for (requested, size, kind, memory, expected) in cases {
         assert_eq!(
-            requested.resolve(dim, unknowns, kind, memory * gib),
+            requested.resolve(&size, kind, memory * gib),
             expected,
-            "{requested:?} in {dim}D, {unknowns} unknowns, {kind:?}, {memory} GiB"
+            "{requested:?}, {size:?}, {kind:?}, {memory} GiB: {:?}",
+            LinearKind::costs(&size)
         );
     }
     let error = Scenario::load(None, &["solver.linear=cg".into()])
         .unwrap_err()
         .to_string();
     assert!(error.contains("solver.linear"), "{error}");
+}
+
+/// On whole scenarios `auto` resolves by the cost model from the built problem's sizes: the 3D
+/// example as it ships (17.6k unknowns, 440 contact nodes, 64 steps) takes the direct path; a
+/// pad one cell thick with half its nodes on Γ_C (13k unknowns, 1 701 contact nodes) the
+/// iterative one, and a run of it (one step of k = 1/64) takes that path.
+#[test]
+fn auto_takes_the_direct_path_on_a_compact_block_and_the_iterative_one_on_a_thin_pad() {
+    use thermocontact::step::{LinearKind, ProblemSize};
+    let chosen = |sets: &[&str]| {
+        let scenario = load(Some(PAPER3D), sets, "\"auto\"");
+        let (problem, params) = (scenario.build().unwrap(), scenario.solver_params());
+        params
+            .linear
+            .resolve(&ProblemSize::of(&problem), params.kind, f64::INFINITY)
+    };
+    assert_eq!(chosen(&[]), LinearKind::Direct);
+    let thin = [
+        "geometry.lengths=[40.0, 10.0, 1.0]",
+        "mesh.nx=80",
+        "mesh.ny=20",
+        "mesh.nz=1",
+    ];
+    assert_eq!(chosen(&thin), LinearKind::Iterative);
+    let mut one_step = thin.to_vec();
+    one_step.extend(["time.final_time=0.015625", "time.steps=1", "output.times=[]"]);
+    assert_eq!(run(Some(PAPER3D), &one_step, "\"auto\"").0.linear, "iterative");
 }
 
 /// A Krylov solve at its cap fails the step by the linear residual, named as such; without

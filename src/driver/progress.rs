@@ -1,14 +1,20 @@
 //! Progress: the bar on a terminal, or a batch run's progress lines (at most every 10 s, at the
-//! output times and at the end); and the log lines (`RunOptions::log`) of cutbacks and of the
+//! output times and at the end), and inside a step that runs longer than a few seconds its outer
+//! iteration ([`crate::step::heartbeat`]); and the log lines (`RunOptions::log`) of cutbacks and of the
 //! errors met while a stopped run records its stop.
 
 use std::io::IsTerminal;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::summary::{OutputRecord, StepRecord};
 use super::RunOptions;
+use crate::step::heartbeat;
+
+/// The environment variable that sets the threshold and interval of a long step's progress
+/// lines, in seconds ([`Progress::heartbeat`]; default [`heartbeat::AFTER`], [`heartbeat::EVERY`]).
+pub const HEARTBEAT_ENV: &str = "THERMOCONTACT_HEARTBEAT_SECONDS";
 
 /// The progress observer: the bar, the batch lines, the log lines.
 pub(super) struct Progress {
@@ -58,6 +64,32 @@ impl Progress {
     /// The march starts: the pace of the lines is measured from here.
     pub fn marching(&mut self) {
         self.marching = Instant::now();
+    }
+
+    /// The lines of a long step ([`crate::step::heartbeat`]) for the time of the march, above
+    /// the bar or as batch lines on stderr; none where there is no progress (`--quiet`). The
+    /// environment variable [`HEARTBEAT_ENV`] (seconds) replaces both the threshold and the
+    /// interval (0: a line at every outer iteration; for tests).
+    pub fn heartbeat(&self) -> Option<heartbeat::HeartbeatScope> {
+        if !self.batch && self.bar.is_hidden() {
+            return None;
+        }
+        let bar = self.bar.clone();
+        let sink = move |line: &str| {
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
+        };
+        let forced = std::env::var(HEARTBEAT_ENV).ok().and_then(|s| s.parse::<f64>().ok());
+        let (after, every) = match forced {
+            Some(seconds) if seconds >= 0.0 && seconds.is_finite() => {
+                (Duration::from_secs_f64(seconds), Duration::from_secs_f64(seconds))
+            }
+            _ => (heartbeat::AFTER, heartbeat::EVERY),
+        };
+        Some(heartbeat::report_to(Box::new(sink), after, every))
     }
 
     /// A log line, above the bar where there is one.

@@ -230,7 +230,16 @@ impl<'a, 'p> Recorder<'a, 'p> {
             None => "uniqueness: not computed (the iterative path's fast solver never forms the contact compliance)"
                 .to_string(),
         });
+        lines.push(self.linear_line());
         lines
+    }
+
+    /// The linear path taken and why ([`LinearKind::choose`]): `linear path: direct (auto: …)`.
+    fn linear_line(&self) -> String {
+        let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
+        let size = crate::step::ProblemSize::of(self.problem);
+        let choice = (self.params.linear).choose(&size, self.params.kind, memory);
+        format!("linear path: {} ({})", self.report.linear.name(), choice.reason)
     }
 
     pub fn summary(&self, status: RunStatus, failure: Option<FailureRecord>) -> Summary {

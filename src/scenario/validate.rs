@@ -342,7 +342,15 @@ impl Scenario {
         let unknowns = (d + 1) as f64 * nodes;
         // Without /proc/meminfo, a bound no machine passes.
         let available = crate::resources::machine_memory().unwrap_or(1e15);
-        let linear = (self.solver.linear).resolve(d, unknowns as usize, self.solver.kind, available);
+        // The contact nodes are not known before the mesh: the unknowns decide (the direct
+        // path's memory, the larger, where the cost model would take it).
+        let size = crate::step::ProblemSize {
+            dim: d,
+            unknowns: unknowns as usize,
+            contact_nodes: 0,
+            steps: self.time.steps,
+        };
+        let linear = (self.solver.linear).resolve(&size, self.solver.kind, available);
         let needed = match linear {
             LinearKind::Iterative => crate::resources::estimated_memory_iterative(unknowns),
             _ => crate::resources::estimated_memory(d, unknowns),

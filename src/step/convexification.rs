@@ -100,6 +100,7 @@ pub(super) fn convexify<C: ConvexSubproblem>(
         super::abort::check()?;
         checks = subproblem.solve(m, &mut iterate, inner_tolerance, info)?;
         info.convexification_iterations = m;
+        super::heartbeat::outer("convexification", m, &checks);
         inner_tolerance = params.inner.next(inner_tolerance, &checks);
         if checks.iter().all(|&(_, value, tolerance)| value <= tolerance) && subproblem.accept(&mut iterate) {
             return Ok(iterate);

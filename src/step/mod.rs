@@ -23,6 +23,7 @@ mod convexification;
 mod descent;
 mod direct;
 mod fast;
+pub mod heartbeat;
 mod iterative;
 mod newton;
 mod newton_krylov;
@@ -164,8 +165,8 @@ pub enum LinearKind {
     /// GMRES + ILU(0) inside a Newton method on all unknowns, nothing condensed
     /// ([`NewtonKrylov`]).
     Iterative,
-    /// [`LinearKind::Direct`] in 2D and for small 3D problems, iterative beyond
-    /// ([`LinearKind::resolve`]).
+    /// The path whose estimated run is cheaper, for the unknowns, the contact nodes and the
+    /// steps at hand ([`LinearKind::choose`]).
     Auto,
 }
 
@@ -187,33 +188,199 @@ impl LinearKind {
     /// whole runs cross.
     pub const AUTO_DIRECT_UNKNOWNS_3D: usize = 70_000;
 
-    /// Direct or iterative for a problem of `dim` dimensions and `unknowns` unknowns solved by
-    /// `kind` on a machine with `memory` bytes. `auto` is direct always in 2D (the factor has
-    /// about 5× A's entries there, and the iterative path pays a Krylov solve per
-    /// convexification iterate: 4.5 s against 1.2 s on the reference run), in 3D up to
-    /// [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns while the estimated peak of the direct path
-    /// ([`crate::resources::estimated_memory`]) is at most half the machine's memory, and
-    /// iterative beyond. Measured on the 3D example, 64 steps, whole runs (direct against
-    /// iterative): 17.6k unknowns 2.1 s against 3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s
-    /// against 30.4 s (and 2.3 GiB against 0.45 GiB); the 3D factor's fill grows like N^{4/3},
-    /// the iterative path's cost per iteration like N. The paper's solver takes the direct path
-    /// wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa iterate
-    /// ([`PaperKrylov`]).
-    pub fn resolve(self, dim: usize, unknowns: usize, kind: SolverKind, memory: f64) -> LinearKind {
-        match self {
-            LinearKind::Auto if dim < 3 => LinearKind::Direct,
-            LinearKind::Auto => {
-                let direct = crate::resources::estimated_memory(dim, unknowns as f64);
-                let fits = direct <= Self::AUTO_DIRECT_MEMORY_SHARE * memory;
-                if fits && (unknowns <= Self::AUTO_DIRECT_UNKNOWNS_3D || kind == SolverKind::Paper) {
-                    LinearKind::Direct
-                } else {
-                    LinearKind::Iterative
-                }
-            }
-            chosen => chosen,
+    /// Outer (convexification) iterations per step that `auto` assumes on both paths (measured:
+    /// 5–11 at k = 1/64 on every body of the table in [`LinearKind::choose`], the same on both
+    /// paths within 10 %).
+    pub const AUTO_OUTER_PER_STEP: f64 = 10.0;
+
+    /// Seconds per entry of the direct factor to factor it (and assemble, condense): the
+    /// set-up of the direct path.
+    pub const AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY: f64 = 2.5e-7;
+
+    /// Seconds per outer iteration per entry of the dense compliance on Γ_C (n_t², n_t = (d − 1)
+    /// × contact nodes): the direct path's nonsmooth iterations are dense products with C.
+    pub const AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY: f64 = 1e-8;
+
+    /// Seconds per step per n_t³ in 2D, where the direct path's fast solver starts each step
+    /// with Newton on the condensed law: a dense n_t × n_t LU per iteration, up to 8 (measured
+    /// on the strip 2048 × 4: 8 per step, 27.6 s per step; in 3D the descent's sweeps take
+    /// their place, and α n_t² covers them).
+    pub const AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D: f64 = 3.2e-9;
+
+    /// Seconds per outer iteration per unknown of the iterative path (its Newton iterations'
+    /// GMRES + ILU(0) solves; its set-up is a tenth of the direct path's and left out).
+    pub const AUTO_ITERATIVE_SECONDS_PER_UNKNOWN: f64 = 2e-6;
+
+    /// An estimated direct run shorter than this takes the direct path whatever the iterative
+    /// one's estimate: the saving would be a few seconds at most, the model leaves out the
+    /// set-up and per-step overheads that dominate small runs, and the direct path is the
+    /// robust one and the reference (it reports the uniqueness condition). The iterative path's
+    /// ILU(0) may stall on a stiff body of several materials: the 3D brake (steel backplate and
+    /// lining, 6 978 unknowns, 384 contact nodes) in 3 steps is estimated 1.5 s direct against
+    /// 0.4 s iterative, and there GMRES reaches its cap at a relative residual of 2e-9.
+    pub const AUTO_DIRECT_ANYWAY_SECONDS: f64 = 5.0;
+
+    /// The estimated cost of a whole run of `size` on each path, in seconds of this machine
+    /// (the constants `AUTO_*` of [`LinearKind`]; the measurements in [`LinearKind::choose`]).
+    ///
+    /// With N unknowns, n_c contact nodes, n_t = (d − 1) n_c, S steps and I =
+    /// [`Self::AUTO_OUTER_PER_STEP`] outer iterations per step:
+    ///
+    /// ```text
+    /// F         = F_sparse(d, N) + (d n_c)² / 2          the factor's entries: the sparse fill
+    ///                                                   (crate::resources) and the dense block of
+    ///                                                   the contact unknowns, ordered last
+    /// direct    = φ F + S I α n_t² + [d = 2] S ν n_t³
+    /// iterative = S I β N
+    /// ```
+    pub fn costs(size: &ProblemSize) -> PathCosts {
+        let d = size.dim as f64;
+        let n = size.unknowns as f64;
+        let contact = size.contact_nodes as f64;
+        let n_t = (d - 1.0) * contact;
+        let factor = crate::resources::estimated_factor_entries(size.dim, n) + (d * contact).powi(2) / 2.0;
+        let outer = size.steps as f64 * Self::AUTO_OUTER_PER_STEP;
+        let newton = if size.dim < 3 {
+            Self::AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D * n_t.powi(3)
+        } else {
+            0.0
+        };
+        PathCosts {
+            factor_entries: factor,
+            direct: Self::AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY * factor
+                + outer * Self::AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY * n_t * n_t
+                + size.steps as f64 * newton,
+            iterative: outer * Self::AUTO_ITERATIVE_SECONDS_PER_UNKNOWN * n,
         }
     }
+
+    /// Direct or iterative for a problem of `size` solved by `kind` on a machine with `memory`
+    /// bytes ([`LinearKind::choose`] without its reason).
+    pub fn resolve(self, size: &ProblemSize, kind: SolverKind, memory: f64) -> LinearKind {
+        self.choose(size, kind, memory).linear
+    }
+
+    /// The path `self` resolves to, and why. `auto` takes the direct path where
+    ///
+    /// 1. in 3D, its estimated peak memory ([`crate::resources::estimated_memory`]) is at most
+    ///    [`Self::AUTO_DIRECT_MEMORY_SHARE`] of the machine's;
+    /// 2. in 3D, the problem has at most [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns: on the 3D
+    ///    example, 64 steps, whole runs direct against iterative: 17.6k unknowns 2.1 s against
+    ///    3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s against 30.4 s (and 2.3 GiB against 0.45
+    ///    GiB); the factor's fill grows like N^{4/3}, the iterative path's cost like N;
+    /// 3. and its estimated run ([`LinearKind::costs`]) is no dearer than the iterative one's
+    ///    (or shorter than [`Self::AUTO_DIRECT_ANYWAY_SECONDS`]):
+    ///    the direct path's cost is also its dense condensation on Γ_C, which grows with the
+    ///    contact nodes, not the unknowns. Measured (release, 16 steps at k = 1/64, both paths
+    ///    on the same machine under a load of about 7 on 2 cores; wall seconds direct against
+    ///    iterative, and the peak memory):
+    ///
+    /// | body | d | N | n_c | direct | iterative | peak MiB |
+    /// |---|---|---|---|---|---|---|
+    /// | 3D example 40 × 10 × 10 | 3 | 17 590 | 440 | 2.9 | 4.2 | 200 / 63 |
+    /// | 3D example 56 × 14 × 14 | 3 | 46 970 | 840 | 29.4 | 16.1 | 777 / 157 |
+    /// | pad 40 × 10 × 5 (60 × 15 × 7 cells) | 3 | 27 862 | 960 | 16.0 | 9.9 | 521 / 95 |
+    /// | thin pad 40 × 13.2 × 3.3 (60 × 20 × 5) | 3 | 27 025 | 1 260 | 21.7 | 11.1 | 688 / 93 |
+    /// | thin pad 40 × 10 × 2 (40 × 10 × 2) | 3 | 4 222 | 440 | 1.40 | 1.39 | 85 / 21 |
+    /// | 2D example 128 × 32 | 2 | 12 384 | 128 | 0.82 | 0.64 | 40 / 24 |
+    /// | 2D example 256 × 64 | 2 | 49 344 | 256 | 6.1 | 28.5 | 139 / 78 |
+    /// | strip 40 × 2.5 (512 × 4) | 2 | 6 652 | 512 | 2.5 | 2.2 | 72 / 17 |
+    /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 477 | 85 | 910 / 51 |
+    ///
+    /// φ, α, ν, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
+    /// bodies, β N 1.2–2.2 µs per unknown). The load slows the iterative path (memory-bound)
+    /// more than the direct one (at 47k, 0.63 s per step here against 0.04–0.06 s on the idle
+    /// machine of `bench --3d`), so on an idle machine the rule leans to the direct path where
+    /// the two are close (the 3D example at 47k and 64 steps: direct; the strip 512 × 4, a tie
+    /// in the table, goes iterative by its Newton term). The paper's solver takes the direct
+    /// path wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa
+    /// iterate ([`PaperKrylov`]).
+    /// `size.contact_nodes = 0` (not known yet: the scenario's memory check before the mesh)
+    /// leaves the unknowns to decide, as before the cost model.
+    pub fn choose(self, size: &ProblemSize, kind: SolverKind, memory: f64) -> LinearChoice {
+        let chosen = |linear, reason: String| LinearChoice { linear, reason };
+        if self != LinearKind::Auto {
+            return chosen(self, "solver.linear".to_string());
+        }
+        let direct_memory = crate::resources::estimated_memory(size.dim, size.unknowns as f64);
+        if size.dim == 3 && direct_memory > Self::AUTO_DIRECT_MEMORY_SHARE * memory {
+            let reason = format!(
+                "auto: the direct path's estimated {} exceeds half the machine's {}",
+                crate::resources::human(direct_memory),
+                crate::resources::human(memory)
+            );
+            return chosen(LinearKind::Iterative, reason);
+        }
+        if kind == SolverKind::Paper {
+            return chosen(
+                LinearKind::Direct,
+                "auto: the paper's solver, whose factor fits".to_string(),
+            );
+        }
+        if size.dim == 3 && size.unknowns > Self::AUTO_DIRECT_UNKNOWNS_3D {
+            let reason = format!("auto: more than {} unknowns in 3D", Self::AUTO_DIRECT_UNKNOWNS_3D);
+            return chosen(LinearKind::Iterative, reason);
+        }
+        let costs = Self::costs(size);
+        let linear = if costs.direct <= costs.iterative.max(Self::AUTO_DIRECT_ANYWAY_SECONDS) {
+            LinearKind::Direct
+        } else {
+            LinearKind::Iterative
+        };
+        let reason = format!(
+            "auto: estimated {:.2} s direct (factor {:.1e} entries, {} contact unknowns) against {:.2} s iterative",
+            costs.direct,
+            costs.factor_entries,
+            size.dim.saturating_sub(1) * size.contact_nodes,
+            costs.iterative
+        );
+        chosen(linear, reason)
+    }
+}
+
+/// What `auto` weighs ([`LinearKind::choose`]), known before anything is assembled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ProblemSize {
+    /// d, 2 or 3.
+    pub dim: usize,
+    /// Unknowns of the step matrix (velocities and temperatures).
+    pub unknowns: usize,
+    /// Nodes of Γ_C (0 where not known yet).
+    pub contact_nodes: usize,
+    /// Time steps of the run.
+    pub steps: usize,
+}
+
+impl ProblemSize {
+    /// The size of `problem`.
+    pub fn of(problem: &crate::model::Problem) -> Self {
+        ProblemSize {
+            dim: problem.dim(),
+            unknowns: problem.n_unknowns(),
+            contact_nodes: problem.contact.len(),
+            steps: problem.time.steps,
+        }
+    }
+}
+
+/// The estimated cost of a run on each path ([`LinearKind::costs`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathCosts {
+    /// Entries of the direct factor, estimated (sparse fill and the dense contact block).
+    pub factor_entries: f64,
+    /// Seconds of the run on the direct path.
+    pub direct: f64,
+    /// Seconds of the run on the iterative path.
+    pub iterative: f64,
+}
+
+/// The path a run takes and why ([`LinearKind::choose`]), for the run's header.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearChoice {
+    /// Direct or iterative.
+    pub linear: LinearKind,
+    /// `solver.linear` where it was given, or `auto:` and the figures that decided.
+    pub reason: String,
 }
 
 /// The step solver's settings; defaults are the paper's (ε_conv = 1e-6).

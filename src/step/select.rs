@@ -50,7 +50,7 @@ impl LinearSystem {
     /// Assembles the step matrix of step size k and factors or preconditions it.
     pub fn new(problem: &Problem, k: f64, params: &SolverParams) -> Result<Self, StepError> {
         let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
-        let linear = (params.linear).resolve(problem.dim(), problem.n_unknowns(), params.kind, memory);
+        let linear = (params.linear).resolve(&super::ProblemSize::of(problem), params.kind, memory);
         Ok(match linear {
             LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, k, params.krylov)?),
             _ => LinearSystem::Direct(StepSystem::factored(problem, StepMatrix::assemble(problem, k))?),
@@ -171,6 +171,11 @@ impl<'a> StepSolver<'a> {
             let next = rows.pressures(problem, previous, &state, &force);
             let scale = next.iter().fold(0.0f64, |m, p| m.max(*p));
             change = crate::la::vector::max_abs_diff(&next, &pressure) / scale.max(f64::MIN_POSITIVE);
+            super::heartbeat::outer(
+                "contact pressure",
+                j,
+                &[(Criterion::IncrementPressure, change, tolerance)],
+            );
             if change <= tolerance {
                 state.pressure = next;
                 return Ok((state, total));
