@@ -234,11 +234,10 @@ impl<'a, 'p> Recorder<'a, 'p> {
         lines
     }
 
-    /// The linear path taken and why ([`LinearKind::choose`]): `linear path: direct (auto: …)`.
+    /// The linear path taken and why ([`SolverParams::linear_choice`]): `linear path: direct
+    /// (auto: …)`.
     fn linear_line(&self) -> String {
-        let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
-        let size = crate::step::ProblemSize::of(self.problem);
-        let choice = (self.params.linear).choose(&size, self.params.kind, memory);
+        let choice = self.params.linear_choice(self.problem);
         format!("linear path: {} ({})", self.report.linear.name(), choice.reason)
     }
 

@@ -408,6 +408,16 @@ pub struct SolverParams {
     pub krylov: KrylovParams,
 }
 
+impl SolverParams {
+    /// The linear path `problem` takes with these settings on this machine, and why
+    /// ([`LinearKind::choose`] with the machine's memory): what the set-up follows and the run's
+    /// header reports.
+    pub fn linear_choice(&self, problem: &crate::model::Problem) -> LinearChoice {
+        let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
+        (self.linear).choose(&ProblemSize::of(problem), self.kind, memory)
+    }
+}
+
 impl Default for SolverParams {
     fn default() -> Self {
         SolverParams {

@@ -49,9 +49,7 @@ pub enum LinearSystem {
 impl LinearSystem {
     /// Assembles the step matrix of step size k and factors or preconditions it.
     pub fn new(problem: &Problem, k: f64, params: &SolverParams) -> Result<Self, StepError> {
-        let memory = crate::resources::machine_memory().unwrap_or(f64::INFINITY);
-        let linear = (params.linear).resolve(&super::ProblemSize::of(problem), params.kind, memory);
-        Ok(match linear {
+        Ok(match params.linear_choice(problem).linear {
             LinearKind::Iterative => LinearSystem::Iterative(KrylovSystem::new(problem, k, params.krylov)?),
             _ => LinearSystem::Direct(StepSystem::factored(problem, StepMatrix::assemble(problem, k))?),
         })
