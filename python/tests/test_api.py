@@ -316,12 +316,18 @@ try:
 except KeyboardInterrupt:
     print("KeyboardInterrupt", flush=True)
 """
-    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
-    assert child.stdout.readline().strip() == "running"
-    time.sleep(1.0)
-    child.send_signal(signal.SIGINT)
-    out, _ = child.communicate(timeout=30)
-    assert "KeyboardInterrupt" in out
+    import tempfile
+
+    # The child's stderr goes to a file (a pipe left unread could stall its log lines), read
+    # back to say why where the child ends without the exception.
+    with tempfile.TemporaryFile(mode="w+") as stderr:
+        child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=stderr, text=True)
+        assert child.stdout.readline().strip() == "running"
+        time.sleep(1.0)
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=30)
+        stderr.seek(0)
+        assert "KeyboardInterrupt" in out, f"exit code {child.returncode}, stderr: {stderr.read()[-3000:]}"
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["status"] == "interrupted" and 0 < summary["failure"]["last_step"] < 100000
 
