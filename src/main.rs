@@ -886,6 +886,13 @@ fn print_summary(s: &Summary) {
             format!("{} ({})", s.descent_steps, s.descent_sweeps)
         );
     }
+    if s.nonmonotone_newton_steps > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "steps by Newton on the law (its)",
+            format!("{} ({})", s.nonmonotone_newton_steps, s.nonmonotone_newton_iterations)
+        );
+    }
     if s.exchange_iterations > 0 {
         println!(
             "{:<34} {:>12}",

@@ -290,3 +290,65 @@ fn a_krylov_solve_at_its_cap_fails_the_step_naming_the_linear_residual() {
         "{error}"
     );
 }
+
+/// Where the convexification loop fails (here: capped at a few iterates), the iterative path
+/// finishes the step by Newton on the nonmonotone law from the step's start instead of cutting
+/// it back, and reaches the loop's solution where the step has one solution: the paper's 2D
+/// example (velocity weakening, 32 × 8 cells) and the 3D example with Tresca's law, against the
+/// same runs with the loop uncapped, fields to 10⁻⁷ and the same stick/slip state.
+#[test]
+fn newton_on_the_law_finishes_the_steps_the_loop_cannot() {
+    let cases: [(Option<&str>, Vec<&str>, &str); 2] = [
+        (
+            None,
+            vec!["mesh.nx=32", "mesh.ny=8", "time.steps=16"],
+            "solver.max_convexification=3",
+        ),
+        (
+            Some(PAPER3D),
+            vec![
+                "mesh.nx=12",
+                "mesh.ny=3",
+                "mesh.nz=3",
+                "time.steps=8",
+                "friction.law=tresca",
+                "friction.bound=60",
+            ],
+            "solver.max_convexification=1",
+        ),
+    ];
+    for (file, sets, cap) in cases {
+        let (loop_summary, by_loop) = run(file, &sets, "iterative");
+        let capped: Vec<&str> = sets.iter().copied().chain([cap]).collect();
+        let (summary, by_newton) = run(file, &capped, "iterative");
+        assert_eq!(loop_summary.nonmonotone_newton_steps, 0);
+        assert!(
+            summary.nonmonotone_newton_steps >= 4,
+            "{cap}: {} steps by Newton on the law",
+            summary.nonmonotone_newton_steps
+        );
+        assert!(summary.cutbacks.is_empty() && loop_summary.cutbacks.is_empty());
+        assert!(
+            summary.max_law_residual <= 1e-6,
+            "law residual {:e}",
+            summary.max_law_residual
+        );
+        let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+        let rel = |a: &[f64], b: &[f64]| {
+            let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+            max_abs(&d) / max_abs(a)
+        };
+        for (name, a, b) in [
+            ("u", &by_loop.u, &by_newton.u),
+            ("w", &by_loop.w, &by_newton.w),
+            ("θ", &by_loop.theta, &by_newton.theta),
+            ("ξ", &by_loop.xi, &by_newton.xi),
+        ] {
+            assert!(rel(a, b) < 1e-7, "{cap}: {name} differs by {:e}", rel(a, b));
+        }
+        for (a, b) in loop_summary.outputs.iter().zip(&summary.outputs) {
+            let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
+            assert_eq!(status(&a.contact), status(&b.contact), "node statuses at t = {}", a.t);
+        }
+    }
+}

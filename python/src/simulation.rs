@@ -252,6 +252,9 @@ pub struct PyStepInfo {
     fallback: bool,
     /// Sweeps of the fast solver's descent.
     descent_sweeps: usize,
+    /// Iterations of the iterative path's Newton on the nonmonotone law, where the
+    /// convexification loop failed (0 where the loop solved the step).
+    nonmonotone_newton_iterations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -272,6 +275,7 @@ impl From<StepInfo> for PyStepInfo {
             newton_iterations: info.newton_iterations,
             fallback: info.fallback,
             descent_sweeps: info.descent_sweeps,
+            nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             krylov_iterations: info.krylov_iterations,
@@ -297,6 +301,7 @@ impl PyStepInfo {
         d.set_item("newton_iterations", self.newton_iterations)?;
         d.set_item("fallback", self.fallback)?;
         d.set_item("descent_sweeps", self.descent_sweeps)?;
+        d.set_item("nonmonotone_newton_iterations", self.nonmonotone_newton_iterations)?;
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
         d.set_item("krylov_iterations", self.krylov_iterations)?;
@@ -307,12 +312,14 @@ impl PyStepInfo {
     fn __repr__(&self) -> String {
         format!(
             "StepInfo(convexification_iterations={}, inner_iterations={}, newton_iterations={}, fallback={}, \
-             descent_sweeps={}, substeps={}, cutback_depth={}, krylov_iterations={})",
+             descent_sweeps={}, nonmonotone_newton_iterations={}, substeps={}, cutback_depth={}, \
+             krylov_iterations={})",
             self.convexification_iterations,
             self.inner_iterations,
             self.newton_iterations,
             if self.fallback { "True" } else { "False" },
             self.descent_sweeps,
+            self.nonmonotone_newton_iterations,
             self.substeps,
             self.cutback_depth,
             self.krylov_iterations

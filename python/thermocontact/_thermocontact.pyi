@@ -103,6 +103,7 @@ class StepInfo:
     newton_iterations: int
     fallback: bool
     descent_sweeps: int
+    nonmonotone_newton_iterations: int
     substeps: int
     cutback_depth: int
     krylov_iterations: int

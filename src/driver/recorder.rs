@@ -128,6 +128,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             seconds: self.step_clock.elapsed().as_secs_f64(),
             energy: self.cumulative_energy(&info.energy),
             energy_residual: info.energy.relative_residual(),
+            nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             heat_residual: info.energy.relative_heat_residual(),
         };
         self.tally.add_step(info, step);
@@ -267,6 +268,8 @@ impl<'a, 'p> Recorder<'a, 'p> {
             fallback_steps: tally.fallback_steps,
             descent_steps: tally.descent_steps,
             descent_sweeps: tally.descent_sweeps,
+            nonmonotone_newton_steps: tally.nonmonotone_newton_steps,
+            nonmonotone_newton_iterations: tally.nonmonotone_newton_iterations,
             krylov_iterations: tally.krylov_iterations,
             linear: report.linear.name().to_string(),
             preconditioner: report.preconditioner.map(|p| p.name().to_string()),

@@ -109,6 +109,12 @@ pub struct Summary {
     pub descent_steps: usize,
     /// Descent sweeps over all steps.
     pub descent_sweeps: usize,
+    /// Steps (or substeps) the iterative path finished by Newton on the nonmonotone law (the
+    /// convexification loop failed there), and that Newton's iterations over all steps.
+    #[serde(default)]
+    pub nonmonotone_newton_steps: usize,
+    #[serde(default)]
+    pub nonmonotone_newton_iterations: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
     /// Over the whole run: a continued run adds its own to those of the parts before (their
@@ -401,6 +407,10 @@ pub struct StepRecord {
     pub energy_residual: f64,
     #[serde(default)]
     pub heat_residual: f64,
+    /// Iterations of the iterative path's Newton on the nonmonotone law, where the loop failed
+    /// ([`StepInfo::nonmonotone_newton_iterations`]).
+    #[serde(default)]
+    pub nonmonotone_newton_iterations: usize,
 }
 
 /// Increments not measured (and those of checkpoints written before steps.csv had them).
@@ -419,8 +429,9 @@ impl StepRecord {
     /// metre of thickness): the levels K, E, H at t_n, the dissipations, works and heats summed
     /// from t = 0 (so that K + E + viscous + numerical + frictional + thermal stress work − load
     /// work − foundation work − energy_residual_J = K₀ + E₀ on every row), and this step's
-    /// residuals relative to their balance's largest term (docs/energy.md).
-    pub const HEADER: [&'static str; 35] = [
+    /// residuals relative to their balance's largest term (docs/energy.md); last, the iterations
+    /// of the iterative path's way out where the convexification loop failed.
+    pub const HEADER: [&'static str; 36] = [
         "n",
         "t",
         "convexification",
@@ -456,6 +467,7 @@ impl StepRecord {
         "heat_dirichlet_J",
         "heat_residual_J",
         "heat_residual_rel",
+        "nonmonotone_newton",
     ];
 
     /// The record as a `steps.csv` row.
@@ -498,6 +510,7 @@ impl StepRecord {
             e.heat_dirichlet,
             e.heat_residual,
             self.heat_residual,
+            self.nonmonotone_newton_iterations as f64,
         ]);
         row
     }
@@ -516,6 +529,10 @@ pub struct Tally {
     pub fallback_steps: usize,
     pub descent_steps: usize,
     pub descent_sweeps: usize,
+    #[serde(default)]
+    pub nonmonotone_newton_steps: usize,
+    #[serde(default)]
+    pub nonmonotone_newton_iterations: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
@@ -561,6 +578,8 @@ impl Tally {
         self.fallback_steps += usize::from(info.fallback);
         self.descent_steps += usize::from(info.descent_sweeps > 0);
         self.descent_sweeps += info.descent_sweeps;
+        self.nonmonotone_newton_steps += usize::from(info.nonmonotone_newton_iterations > 0);
+        self.nonmonotone_newton_iterations += info.nonmonotone_newton_iterations;
         self.krylov_iterations += info.krylov_iterations;
         self.exchange_iterations += info.exchange_iterations;
         self.pressure_iterations += info.pressure_iterations;

@@ -10,7 +10,7 @@
 //! |---|---|---|---|
 //! | [`super::paper`], [`super::paper_krylov`] | the full state, ξ, w, h on Γ_C | Uzawa iterations on ξ | (77)–(80): the relative increments of u, θ, ξ, ζ |
 //! | [`super::fast`] (direct path) | w, ξ on Γ_C | the descent's sweeps (or Newton) on the condensed problem | increments of w and ξ on Γ_C and the nodal law, then the law on a fresh stress |
-//! | [`super::newton_krylov`] (iterative path) | all unknowns, w, ξ | semismooth Newton iterations with GMRES | increments of w and ξ and the nodal law, once the convex problem's law holds |
+//! | [`super::newton_krylov`] (iterative path) | all unknowns, w, ξ | semismooth Newton iterations with GMRES (where the loop fails: Newton on the nonmonotone law) | increments of w and ξ and the nodal law, once the convex problem's law holds |
 //!
 //! **The inner tolerance.** The paper's Uzawa loop solves each convex problem to a fixed
 //! tolerance ([`InnerTolerance::Fixed`]). The Newton-type inner solvers need each convex problem

@@ -453,6 +453,9 @@ pub struct StepInfo {
     /// Sweeps of the fast solver's descent (0 where Newton or the convexification loop solved
     /// the step).
     pub descent_sweeps: usize,
+    /// Iterations of the iterative path's Newton on the nonmonotone law, its way out where the
+    /// convexification loop failed (0 where the loop solved the step).
+    pub nonmonotone_newton_iterations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -476,6 +479,7 @@ impl StepInfo {
         self.increments = other.increments;
         self.fallback |= other.fallback;
         self.descent_sweeps += other.descent_sweeps;
+        self.nonmonotone_newton_iterations += other.nonmonotone_newton_iterations;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;

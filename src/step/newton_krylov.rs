@@ -27,6 +27,29 @@
 //! convexification loop from the previous step (`tests/newton_krylov.rs`: the same fields to
 //! 10⁻⁶ and the same stick/slip state, 2D and 3D).
 //!
+//! **Where the loop fails: Newton on the nonmonotone law.** The direct path descends on the
+//! condensed step's energy where its loop fails ([`super::descent`]); that needs the dense
+//! K = C⁻¹ on Γ_C, which this path does not have. Here the same semismooth Newton iterations
+//! run on the nonmonotone law itself, from the step's start: the bound at the iterate, its
+//! fall b′(|w_i|) in the slip rows (ξ_i = a + B w_i with the −b′ n dirᵀ term of
+//! [`super::newton`]'s linearization), capped at [`FALL_CAP`] A_ii/ℓ_i so that no linearized
+//! node is a negative spring stiffer than what holds it; the loop's stop criteria. Only where
+//! this fails too (30 iterations, an iterate not finite, the law's residual ten times the
+//! first's) is the step cut back. So the loop's solution stays wherever the loop converges,
+//! and where it does not the step's solution is the one this Newton reaches from the previous
+//! step. On the 3D example at 47k unknowns and k = 1/8 (`bench --hard`), where the loop cycles
+//! through its 200 iterates in step 3 (the law's residual 0.07 → 1.2 → 0.07 with period 6),
+//! Newton on the law converges in 15 iterations (cap 0.5; cap 0.2 cycles with period 5): the
+//! run takes no cutback instead of three (down to k/8), 874 Newton iterations instead of 1 374.
+//! Tried there first and dropped: extrapolating the loop's iterates along each step of the
+//! loop on the step energy E of [`super::descent`] (E along the line from Γ_C data alone,
+//! since both iterates satisfy the linear equations: τ Σ ℓ ξ·d + ½τ² Σ ℓ d·Δξ + Σ ℓ Δφ; the
+//! step taken with the τ ∈ {2, 4, …, 1024} of least E): E fell by about 0.2 every three
+//! iterates for 150 iterates (a slow descent, not a cycle), and the step converged after 156
+//! iterates instead of failing at 200, still 240 Newton iterations; Newton with backtracking on
+//! the law's residual (‖F‖₂ or max): the capped Newton direction is not a descent direction
+//! of it where the law falls steeply (every step length up to 1/16 increased it).
+//!
 //! Tried and dropped, each measured on the 3D example (40 × 10 × 10, 64 steps):
 //! - one Newton step per bound update (bounds lagged inside Newton): 21 solves per step against
 //!   22, but another solution where the law is steep (one node of 440 on another branch at step
@@ -81,9 +104,8 @@
 //! per product of the convexification loop's inner iterations (hundreds per step); the fast
 //! solver's descent needs K = C⁻¹, dense. Newton on the nonmonotone law itself (with the slope
 //! b′) converges faster where the law is shallow, but cycles where it is steep (steepness ≥ 1,
-//! the paper's example), the regime this path is for. The descent of the direct path (where the
-//! convexification loop fails) has no counterpart here yet: a step the loop cannot solve is cut
-//! back.
+//! the paper's example), the regime this path is for, and picks other solutions than the loop
+//! where the step has several: it is this path's way out where the loop fails, not its method.
 
 use std::time::Instant;
 
@@ -107,6 +129,25 @@ enum Linearized {
 /// (the next iterate starts from where this one stopped).
 const MAX_NEWTON_PER_CONVEX_PROBLEM: usize = 20;
 
+/// The way out where the loop fails: Newton iterations on the nonmonotone law before the step
+/// is given up (and cut back). Where it converged on the 3D example at k = 1/8 it took 15.
+const MAX_NONMONOTONE_NEWTON: usize = 30;
+
+/// The fall of the law the way out's Newton linearizes with, at most this fraction of the
+/// node's diagonal stiffness per unit weight, A_ii/ℓ_i: a steeper fall makes the linearized
+/// node a negative spring stiffer than the body holding it (47k unknowns, k = 1/8: 0.5
+/// converges in the step the loop cannot solve, 0.2 cycles with period 5).
+const FALL_CAP: f64 = 0.5;
+
+/// The slope of the friction bound a slip node's Newton linearization takes.
+#[derive(Clone, Copy)]
+enum Fall<'f> {
+    /// None: the bound frozen (the convex problems of the loop).
+    Frozen,
+    /// b′(|w_i|) per node, capped ([`FALL_CAP`]): Newton on the nonmonotone law itself.
+    Capped(&'f [f64]),
+}
+
 /// One step's linear algebra: Ã (A with its contact rows linearized), its ILU(0) and b̃.
 struct Linearization<'s> {
     system: &'s KrylovSystem,
@@ -125,6 +166,20 @@ struct Linearization<'s> {
 }
 
 impl Linearization<'_> {
+    /// [`FALL_CAP`] A_ii/ℓ_i per contact node, A_ii the diagonal entry of its first tangential
+    /// row in the step matrix.
+    fn fall_caps(&self) -> Vec<f64> {
+        let sys = self.system;
+        (sys.nodes.iter())
+            .map(|node| {
+                let row = node.tangent.first().map_or(sys.first_contact, |&(_, row)| row);
+                let (cols, values) = (self.a.row(row).0, &sys.base[self.a.offset_from(sys.first_contact, row)]);
+                let diagonal = cols.binary_search(&(row as u32)).map_or(0.0, |p| values[p]);
+                FALL_CAP * diagonal / node.weight
+            })
+            .collect()
+    }
+
     /// One Newton iteration of the convex problem with the bounds `frozen`, from (w, ξ) (x the
     /// unknowns they come from, updated in place): linearize, solve Ã x = b̃ by GMRES from x,
     /// and return the new (w, ξ).
@@ -134,6 +189,7 @@ impl Linearization<'_> {
         w: &[f64],
         xi: &[f64],
         frozen: &[f64],
+        fall: Fall,
         info: &mut StepInfo,
     ) -> Result<(Vec<f64>, Vec<f64>), SolveError> {
         let sys = self.system;
@@ -181,8 +237,12 @@ impl Linearization<'_> {
                 }
                 self.nodes.push(Linearized::Stick);
             } else {
+                let slope = match fall {
+                    Fall::Frozen => 0.0,
+                    Fall::Capped(slopes) => slopes[i],
+                };
                 let (a_i, b_i) =
-                    slip_linearization(&wi[..m], &xii[..m], &q[..m], q_norm, bound, 0.0, node.augmentation, m);
+                    slip_linearization(&wi[..m], &xii[..m], &q[..m], q_norm, bound, slope, node.augmentation, m);
                 for (j, &(_, row)) in node.tangent.iter().enumerate() {
                     let shift: f64 = (0..m).map(|l| b_i[j][l] * v[l]).sum();
                     rhs[row] += node.weight * (a_i[j] - shift);
@@ -309,7 +369,15 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations: self.max_iterations,
             inner: InnerTolerance::Adaptive { floor: 1e-10 },
         };
-        let iterate = convexify(&mut newton, AllUnknowns { x, w, xi }, &params, &mut info)?;
+        let start = AllUnknowns { x, w, xi };
+        let iterate = match convexify(&mut newton, start.clone(), &params, &mut info) {
+            Ok(iterate) => iterate,
+            Err(SolveError::NotConverged(failure)) => match newton.nonmonotone_newton(start, &mut info)? {
+                Some(iterate) => iterate,
+                None => return Err(SolveError::NotConverged(failure)),
+            },
+            Err(other) => return Err(other),
+        };
         drop(guard);
         let mut x_unknowns = vec![0.0; n];
         sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);
@@ -320,6 +388,37 @@ impl<'a> NewtonKrylov<'a> {
     fn tangential(&self, x: &[f64]) -> Vec<f64> {
         let td = self.problem.dim() - 1;
         tangential(&self.system.nodes, td, x, self.problem.contact.len() * td)
+    }
+
+    /// The stop criteria between the iterates (w_old, ξ_old) and (w, ξ), with the bounds
+    /// `old_bounds` of the first (scaling the change of ξ) and `bounds` of the second: max |Δw| / max |w|, max |Δξ| / max g, and the
+    /// nonmonotone law at (w, ξ) relative to its smallest bound.
+    fn criteria(
+        &self,
+        w: &[f64],
+        w_old: &[f64],
+        xi: &[f64],
+        xi_old: &[f64],
+        old_bounds: &[f64],
+        bounds: &[f64],
+    ) -> Vec<(Criterion, f64, f64)> {
+        let g_scale = old_bounds.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
+        let g_min = crate::model::law_scale(bounds.iter().copied());
+        let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let law = self.law_residual(w, xi, bounds);
+        vec![
+            (
+                Criterion::IncrementW,
+                max_diff(w, w_old) / w_scale.max(f64::MIN_POSITIVE),
+                self.tolerance,
+            ),
+            (
+                Criterion::IncrementXiNodal,
+                max_diff(xi, xi_old) / g_scale,
+                self.tolerance,
+            ),
+            (Criterion::NodalLaw, law / g_min.max(f64::MIN_POSITIVE), self.tolerance),
+        ]
     }
 
     /// max_i |ξ_i − P_{g_i}(ξ_i − r_i w_i)| (stress units) for the bounds g: with g = b(|w|) the
@@ -340,6 +439,7 @@ impl<'a> NewtonKrylov<'a> {
 
 /// An iterate of the Newton–Krylov loop: all unknowns (in the system's order), and w_τ, ξ on
 /// Γ_C.
+#[derive(Clone)]
 struct AllUnknowns {
     x: Vec<f64>,
     w: Vec<f64>,
@@ -352,6 +452,60 @@ struct SemismoothNewton<'s, 'a> {
     linearization: Linearization<'s>,
     /// Whether the last convex problem's law held within its Newton iterations.
     inner_converged: bool,
+}
+
+impl SemismoothNewton<'_, '_> {
+    /// The way out where the loop fails: semismooth Newton on the nonmonotone law itself from
+    /// the step's start (slip nodes linearized with the law's fall b′, capped at [`FALL_CAP`]
+    /// A_ii/ℓ_i), stopping on the loop's criteria. `None` after [`MAX_NONMONOTONE_NEWTON`]
+    /// iterations, once an iterate is not finite, or once the law's residual grows past ten
+    /// times the first's: the step is then given up as the loop left it.
+    fn nonmonotone_newton(
+        &mut self,
+        mut iterate: AllUnknowns,
+        info: &mut StepInfo,
+    ) -> Result<Option<AllUnknowns>, SolveError> {
+        let solver = self.solver;
+        let laws = self.linearization.laws;
+        let td = self.linearization.td;
+        let caps = self.linearization.fall_caps();
+        // The loop's last solve left a residual for another x.
+        self.linearization.residual.clear();
+        let mut first_law = None;
+        for n in 1..=MAX_NONMONOTONE_NEWTON {
+            super::abort::check()?;
+            let bounds = laws.bounds(&iterate.w);
+            let slopes: Vec<f64> = (0..bounds.len())
+                .map(|i| {
+                    laws.bound_derivative(i, norm(&iterate.w[i * td..(i + 1) * td]))
+                        .max(-caps[i])
+                })
+                .collect();
+            let (w_old, xi_old) = (iterate.w.clone(), iterate.xi.clone());
+            let AllUnknowns { x, w, xi } = &mut iterate;
+            (*w, *xi) = match self
+                .linearization
+                .newton_iteration(x, w, xi, &bounds, Fall::Capped(&slopes), info)
+            {
+                Ok(next) => next,
+                Err(SolveError::NotConverged(_)) => return Ok(None),
+                Err(other) => return Err(other),
+            };
+            info.nonmonotone_newton_iterations = n;
+            let new_bounds = laws.bounds(&iterate.w);
+            let checks = solver.criteria(&iterate.w, &w_old, &iterate.xi, &xi_old, &bounds, &new_bounds);
+            super::heartbeat::outer("Newton on the nonmonotone law", n, &checks);
+            if checks.iter().all(|&(_, value, tolerance)| value <= tolerance) {
+                return Ok(Some(iterate));
+            }
+            let law = checks[2].1;
+            let first = *first_law.get_or_insert(law);
+            if !checks.iter().all(|c| c.1.is_finite()) || law > 10.0 * first.max(1.0) {
+                return Ok(None);
+            }
+        }
+        Ok(None)
+    }
 }
 
 impl ConvexSubproblem for SemismoothNewton<'_, '_> {
@@ -376,7 +530,9 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         self.inner_converged = false;
         for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
             let AllUnknowns { x, w, xi } = iterate;
-            (*w, *xi) = self.linearization.newton_iteration(x, w, xi, &frozen, info)?;
+            (*w, *xi) = self
+                .linearization
+                .newton_iteration(x, w, xi, &frozen, Fall::Frozen, info)?;
             // The linear equations hold at the new iterate (up to the Krylov tolerance and
             // the lagged heat), so the convex problem is solved where its law holds: no
             // second solve to see the update vanish.
@@ -385,28 +541,8 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
                 break;
             }
         }
-        let (w, xi) = (&iterate.w, &iterate.xi);
-        let bounds = laws.bounds(w);
-        let g_min = crate::model::law_scale(bounds.iter().copied());
-        let w_scale = w.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-        let law = solver.law_residual(w, xi, &bounds);
-        Ok(vec![
-            (
-                Criterion::IncrementW,
-                max_diff(w, &w_outer) / w_scale.max(f64::MIN_POSITIVE),
-                solver.tolerance,
-            ),
-            (
-                Criterion::IncrementXiNodal,
-                max_diff(xi, &xi_outer) / g_scale,
-                solver.tolerance,
-            ),
-            (
-                Criterion::NodalLaw,
-                law / g_min.max(f64::MIN_POSITIVE),
-                solver.tolerance,
-            ),
-        ])
+        let bounds = laws.bounds(&iterate.w);
+        Ok(solver.criteria(&iterate.w, &w_outer, &iterate.xi, &xi_outer, &frozen, &bounds))
     }
 
     /// A converged loop needs its last convex problem solved too.

@@ -4,7 +4,7 @@
 //! | kind \ path | direct (LDLᵀ + condensation on Γ_C) | iterative (Newton matrix + GMRES) |
 //! |---|---|---|
 //! | `paper` | `convexification-uzawa` ([`PaperSolver`]): the convexification loop, Uzawa inner iterations on Γ_C | `convexification-uzawa-krylov` ([`PaperKrylov`]): the same loop and iterations, each Uzawa iterate a Krylov solve |
-//! | `fast` | `condensed-newton` ([`FastSolver`]): Newton on the condensed law, the convexification loop with descent inner solves, the descent where both fail | `newton-krylov` ([`NewtonKrylov`]): the convexification loop with semismooth-Newton inner solves on all unknowns, no descent |
+//! | `fast` | `condensed-newton` ([`FastSolver`]): Newton on the condensed law, the convexification loop with descent inner solves, the descent where both fail | `newton-krylov` ([`NewtonKrylov`]): the convexification loop with semismooth-Newton inner solves on all unknowns, Newton on the nonmonotone law where it fails |
 //!
 //! `paper` is one algorithm on both paths; `fast` means "the fastest solver of the path": two
 //! algorithms, with two names ([`StepSolver::algorithm`], `summary.json`'s `algorithm`).

@@ -218,7 +218,7 @@ pub fn hard_cases() -> Vec<HardCase> {
         ),
         case(
             "3d-iterative",
-            "the same on the iterative path (Newton–Krylov; no descent: cutback instead)",
+            "the same on the iterative path (Newton–Krylov; where the loop fails, Newton on the law)",
             Some("scenarios/paper3d.toml"),
             &[
                 "mesh.nx=56",
