@@ -107,7 +107,7 @@ enum Command {
         /// Run the hard suite instead: long runs, a coarse k, steep velocity weakening (α = 1000,
         /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 1.5 minutes, most of it the
         /// 3D case). Prints for each case whether it completed, its cutbacks, the steps the
-        /// descent finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
+        /// descent (direct path) or Newton on the law (iterative path) finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
         /// case reads scenarios/paper3d.toml).
         #[arg(long)]
         hard: bool,

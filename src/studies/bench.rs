@@ -245,6 +245,9 @@ pub struct HardRow {
     pub deepest_cutback: usize,
     /// Steps the fast solver finished by descent (the convexification loop failed there).
     pub descent_steps: usize,
+    /// Steps the iterative path finished by Newton on the nonmonotone law (its loop failed).
+    #[serde(default)]
+    pub nonmonotone_newton_steps: usize,
     /// Largest nodal friction-law residual of the returned states, relative to μ(0)S.
     pub max_law_residual: Option<f64>,
     /// Wall time of the child process.
@@ -266,6 +269,7 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
         cutback_steps: 0,
         deepest_cutback: 0,
         descent_steps: 0,
+        nonmonotone_newton_steps: 0,
         max_law_residual: None,
         wall: 0.0,
         peak_memory_mib: None,
@@ -304,6 +308,7 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
     row.cutback_steps = cutbacks.len();
     row.deepest_cutback = cutbacks.iter().map(|c| int(&c["depth"])).max().unwrap_or(0);
     row.descent_steps = int(&summary["descent_steps"]);
+    row.nonmonotone_newton_steps = int(&summary["nonmonotone_newton_steps"]);
     row.max_law_residual = summary["max_law_residual"].as_f64();
     row.peak_memory_mib = summary["peak_memory_mib"].as_f64();
     row.failure = summary["failure"]["message"].as_str().map(str::to_string);
@@ -313,12 +318,12 @@ pub fn run_hard(exe: &Path, work: &Path, case: &HardCase) -> anyhow::Result<Hard
 /// The hard suite's table.
 pub fn format_hard_table(rows: &[HardRow]) -> String {
     let mut out = format!(
-        "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>11} {:>8} {:>8}\n",
-        "case", "status", "unknowns", "steps", "cutbacks", "descent", "law resid.", "wall [s]", "mem MiB"
+        "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>10} {:>11} {:>8} {:>8}\n",
+        "case", "status", "unknowns", "steps", "cutbacks", "descent", "law Newton", "law resid.", "wall [s]", "mem MiB"
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>11} {:>8.2} {:>8}\n",
+            "{:<12} {:>9} {:>8} {:>5} {:>9} {:>7} {:>10} {:>11} {:>8.2} {:>8}\n",
             r.name,
             r.status,
             r.unknowns,
@@ -329,6 +334,7 @@ pub fn format_hard_table(rows: &[HardRow]) -> String {
                 format!("{} (k/{})", r.cutback_steps, 1usize << r.deepest_cutback)
             },
             r.descent_steps,
+            r.nonmonotone_newton_steps,
             r.max_law_residual.map_or("-".to_string(), |v| format!("{v:.1e}")),
             r.wall,
             r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
