@@ -289,3 +289,51 @@ int tc_dist_gather(tc_dist *dist, double *all)
   PetscCall(VecDestroy(&whole));
   PetscFunctionReturn(0);
 }
+
+/* A vector with ghost entries (VecGhost): n_owned owned entries (PETSc's layout), then copies of
+ * the n_ghost global entries `ghosts`, refreshed from their owners by tc_ghost_update. */
+int tc_ghost_create(int n_owned, int n_ghost, const int *ghosts, Vec *out)
+{
+  PetscInt *g;
+  PetscFunctionBeginUser;
+  *out = NULL;
+  PetscCall(PetscMalloc1(n_ghost, &g));
+  for (int i = 0; i < n_ghost; ++i) g[i] = ghosts[i];
+  PetscCall(VecCreateGhost(PETSC_COMM_WORLD, n_owned, PETSC_DECIDE, n_ghost, g, out));
+  PetscCall(PetscFree(g));
+  PetscFunctionReturn(0);
+}
+
+/* The owned entries from `owned`, then every ghost from its owner (VecGhostUpdate, forward). */
+int tc_ghost_set_and_update(Vec v, const double *owned)
+{
+  PetscScalar *x;
+  PetscInt     n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(v, &n));
+  PetscCall(VecGetArrayWrite(v, &x));
+  memcpy(x, owned, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayWrite(v, &x));
+  PetscCall(VecGhostUpdateBegin(v, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGhostUpdateEnd(v, INSERT_VALUES, SCATTER_FORWARD));
+  PetscFunctionReturn(0);
+}
+
+/* The local form: owned entries then ghosts (n_local values into `local`). */
+int tc_ghost_local(Vec v, double *local, int n_local)
+{
+  Vec                form;
+  const PetscScalar *x;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGhostGetLocalForm(v, &form));
+  PetscCall(VecGetLocalSize(form, &n));
+  PetscCheck(n == n_local, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "local form of %d entries, %d expected", (int)n, n_local);
+  PetscCall(VecGetArrayRead(form, &x));
+  memcpy(local, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(form, &x));
+  PetscCall(VecGhostRestoreLocalForm(v, &form));
+  PetscFunctionReturn(0);
+}
+
+void tc_ghost_destroy(Vec v) { VecDestroy(&v); }

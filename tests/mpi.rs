@@ -20,12 +20,12 @@ mod distributed {
     use std::process::Command;
 
     use thermocontact::la::mpi::{
-        Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, Reduction,
+        Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, GhostedVector, Reduction,
     };
     use thermocontact::la::QuasiDefiniteLdlt;
     use thermocontact::mesh::cuboid;
     use thermocontact::model::{samples, DistributedStepMatrix, Problem, State, StepMatrix};
-    use thermocontact::partition::MeshPartition;
+    use thermocontact::partition::{DofLayout, MeshPartition};
 
     const PROGRAM: &str = "THERMOCONTACT_MPI_RANK_PROGRAM";
 
@@ -192,10 +192,36 @@ mod distributed {
         assert_eq!(whole.map(|w| w.len()), comm.is_root().then_some(n));
     }
 
-    /// The cells' parts computed on rank 0 reach every rank: the same checksum everywhere.
+    /// The cells' parts computed on rank 0 reach every rank: the same checksum everywhere. A
+    /// nodal field (one unknown per node, as θ) in the partition's layout, with the ghosts of
+    /// each rank as a `VecGhost`: after the update, every ghost holds its owner's value.
     fn the_partition_is_the_same_on_every_rank(comm: &Communicator) {
         let mesh = cuboid([40.0, 10.0, 10.0], [12, 3, 3]);
         let partition = MeshPartition::on_root(comm, &mesh).unwrap();
+        let layout = DofLayout::new(&partition, mesh.n_nodes(), |p, out| out.push(p));
+        let field = |p: usize| 0.5 * p as f64 + mesh.coords[p][2];
+        let ghosts = partition.ghost_nodes(&mesh, comm.rank());
+        let ghost_index: Vec<usize> = ghosts.iter().map(|&p| layout.index_of[p]).collect();
+        let mut vector = GhostedVector::new(layout.owned(comm.rank()).len(), &ghost_index).unwrap();
+        let owned: Vec<f64> = layout.owned(comm.rank()).map(|g| field(layout.order[g])).collect();
+        vector.update(&owned).unwrap();
+        let local = vector.local().unwrap();
+        assert_eq!(local[..owned.len()], owned[..]);
+        for (&p, &value) in ghosts.iter().zip(&local[owned.len()..]) {
+            assert_eq!(value, field(p), "ghost node {p} on rank {}", comm.rank());
+        }
+        assert!(
+            comm.rank() > 0 || ghosts.is_empty(),
+            "rank 0 owns every node of its cells"
+        );
+        let mut n_ghosts = [ghosts.len()];
+        comm.all_reduce_usize(&mut n_ghosts, Reduction::Sum).unwrap();
+        assert_eq!(
+            n_ghosts[0] > 0,
+            comm.size() > 1,
+            "{} ghosts over the ranks",
+            n_ghosts[0]
+        );
         let checksum = partition
             .cell_part
             .iter()

@@ -3,7 +3,9 @@
 //! broadcast from rank 0, barrier, abort of every rank), the partition of a graph by PETSc's
 //! `MatPartitioning` ([`partition_graph`], PT-Scotch), and a [`DistributedMatrix`]: a PETSc
 //! MPIAIJ matrix whose pattern is given once as COO pairs, refilled by value, with its
-//! right-hand side and GMRES preconditioned by block Jacobi + ILU(0) or GAMG.
+//! right-hand side and GMRES preconditioned by block Jacobi + ILU(0) or GAMG; a
+//! [`GhostedVector`] (PETSc's `VecGhost`): owned entries and the copies a rank reads of its
+//! neighbours', refreshed by PETSc.
 //!
 //! **The numbering is PETSc's.** Rank r owns the rows `first_r .. first_r + n_owned_r`, with
 //! `first_r` the sum of the owned counts of the ranks below it: every index given here is a
@@ -86,6 +88,15 @@ extern "C" {
     ) -> c_int;
     fn tc_dist_gather(dist: *mut RawDist, all: *mut c_double) -> c_int;
     fn tc_dist_destroy(dist: *mut RawDist);
+    fn tc_ghost_create(n_owned: c_int, n_ghost: c_int, ghosts: *const c_int, out: *mut *mut RawVec) -> c_int;
+    fn tc_ghost_set_and_update(v: *mut RawVec, owned: *const c_double) -> c_int;
+    fn tc_ghost_local(v: *mut RawVec, local: *mut c_double, n_local: c_int) -> c_int;
+    fn tc_ghost_destroy(v: *mut RawVec);
+}
+
+#[repr(C)]
+struct RawVec {
+    _private: [u8; 0],
 }
 
 /// A failed call as the error of `operation`.
@@ -482,6 +493,78 @@ impl DistributedMatrix {
             tc_dist_gather(self.handle.as_ptr(), all.as_mut_ptr())
         })?;
         Ok(comm.is_root().then_some(all))
+    }
+}
+
+/// A distributed vector with ghosts (PETSc's `VecGhost`): this rank's owned entries (PETSc's
+/// layout, as [`DistributedMatrix`]'s rows) and copies of the global entries `ghosts`, which
+/// [`GhostedVector::update`] refreshes from their owners. What a rank reads of the fields (u,
+/// w, θ) at the nodes of its cells that other ranks own.
+pub struct GhostedVector {
+    handle: NonNull<RawVec>,
+    n_owned: usize,
+    n_ghosts: usize,
+}
+
+impl GhostedVector {
+    /// `n_owned` entries on this rank (after those of the ranks below it) and copies of the
+    /// entries `ghosts` (global indices owned by other ranks); collective.
+    pub fn new(n_owned: usize, ghosts: &[usize]) -> Result<Self, Error> {
+        const OPERATION: &str = "VecCreateGhost";
+        let ghosts32 = ghosts
+            .iter()
+            .map(|&g| index32(OPERATION, g))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut raw = std::ptr::null_mut();
+        let _petsc = petsc_lock();
+        // SAFETY: ghosts.len() indices; `raw` is written on success.
+        let code = unsafe {
+            tc_ghost_create(
+                index32(OPERATION, n_owned)?,
+                index32(OPERATION, ghosts.len())?,
+                ghosts32.as_ptr(),
+                &mut raw,
+            )
+        };
+        let handle = NonNull::new(raw)
+            .filter(|_| code == 0)
+            .ok_or_else(|| failed(OPERATION, code))?;
+        Ok(GhostedVector {
+            handle,
+            n_owned,
+            n_ghosts: ghosts.len(),
+        })
+    }
+
+    /// Sets the owned entries and refreshes every ghost from its owner; collective.
+    pub fn update(&mut self, owned: &[f64]) -> Result<(), Error> {
+        assert_eq!(owned.len(), self.n_owned, "one value per owned entry");
+        let _petsc = petsc_lock();
+        // SAFETY: a live vector of n_owned owned entries.
+        check("VecGhostUpdate", unsafe {
+            tc_ghost_set_and_update(self.handle.as_ptr(), owned.as_ptr())
+        })
+    }
+
+    /// The local form: the owned entries, then the ghosts in the order given to
+    /// [`GhostedVector::new`].
+    pub fn local(&self) -> Result<Vec<f64>, Error> {
+        let n_local = self.n_owned + self.n_ghosts;
+        let mut local = vec![0.0; n_local];
+        let _petsc = petsc_lock();
+        // SAFETY: a live vector; `local` has room for its local form (checked by the C side).
+        check("VecGhostGetLocalForm", unsafe {
+            tc_ghost_local(self.handle.as_ptr(), local.as_mut_ptr(), n_local as c_int)
+        })?;
+        Ok(local)
+    }
+}
+
+impl Drop for GhostedVector {
+    fn drop(&mut self) {
+        let _petsc = petsc_lock();
+        // SAFETY: the vector is live and dropped once; collective.
+        unsafe { tc_ghost_destroy(self.handle.as_ptr()) }
     }
 }
 
