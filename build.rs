@@ -1,5 +1,6 @@
 //! Compiles the C layer between this crate and PETSc (`csrc/petsc_amg.c`) when the `petsc`
-//! feature is on; without it there is nothing to build.
+//! feature is on, and its MPI part (`csrc/petsc_mpi.c`) when the `mpi` feature is; without them
+//! there is nothing to build.
 
 fn main() {
     #[cfg(feature = "petsc")]
@@ -21,6 +22,15 @@ mod petsc {
         let mpi = found("mpi").or_else(|_| found("ompi")).ok();
         let mut c = cc::Build::new();
         c.file("csrc/petsc_amg.c").warnings(true);
+        if cfg!(feature = "mpi") {
+            // The MPI calls of csrc/petsc_mpi.c link against libmpi (the `mpi` probe above).
+            println!("cargo:rerun-if-changed=csrc/petsc_mpi.c");
+            assert!(
+                mpi.is_some(),
+                "the `mpi` feature needs MPI's pkg-config file (Debian: apt-get install libopenmpi-dev)"
+            );
+            c.file("csrc/petsc_mpi.c");
+        }
         for path in petsc
             .include_paths
             .iter()

@@ -64,7 +64,8 @@
 //!   step/        one time step: the nonsmooth solvers over the direct and iterative back-ends
 //!   model/       Problem + ProblemBuilder, State, the step matrix, norms (77)–(80), samples
 //!   contact/ · loads/ · fem/ · material     laws and frames · data at (x, t) · P1 assembly · tensors
-//!   la/          generic sparse linear algebra: CSC/CSR, vectors, LDLᵀ, ILU(0), GMRES, PETSc
+//!   partition    (feature `mpi`) the cells and nodes of a mesh over the ranks, the unknowns' layout
+//!   la/          generic sparse linear algebra: CSC/CSR, vectors, LDLᵀ, ILU(0), GMRES, PETSc, MPI
 //!   mesh/ · resources                       meshes and their checks · the memory estimate
 //! ```
 //!
@@ -88,6 +89,8 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+#[cfg(feature = "mpi")]
+pub mod partition;
 pub mod resources;
 pub mod scenario;
 pub mod step;

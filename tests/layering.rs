@@ -12,6 +12,7 @@ const STACK: &[&str] = &[
     "resources",
     "mesh",
     "la",
+    "partition",
     "material",
     "fem",
     "loads",

@@ -28,6 +28,9 @@ pub enum LaError {
         /// estimates it).
         history: Vec<f64>,
     },
+    /// A call into PETSc or MPI failed (the distributed back-end, cargo feature `mpi`).
+    #[error("PETSc failed in {operation}: {detail}")]
+    Petsc { operation: &'static str, detail: String },
 }
 
 /// The stage of a factorization that failed.

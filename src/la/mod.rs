@@ -10,7 +10,9 @@
 //! - [`Ilu0`] and [`gmres`]: the incomplete factor and the restarted Krylov method;
 //! - [`NodeGraph`] and [`level_bisection`]: the cell graph of the nodes and its two-way split
 //!   for the parallel sweeps;
-//! - `petsc` (feature `petsc`): the thin binding to PETSc's GAMG.
+//! - `petsc` (feature `petsc`): the thin binding to PETSc's GAMG;
+//! - `mpi` (feature `mpi`): the communicator, PETSc's graph partitioner and its distributed
+//!   matrix with GMRES (docs/distributed.md).
 //!
 //! Errors: [`LaError`], with the stage of a factorization that failed ([`FactorStage`]).
 
@@ -19,6 +21,8 @@ mod gmres;
 mod graph;
 mod ilu;
 mod ldlt;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 #[cfg(feature = "petsc")]
 pub mod petsc;
 mod sparse;

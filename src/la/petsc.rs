@@ -29,7 +29,14 @@ struct RawAmg {
 }
 
 extern "C" {
-    fn tc_petsc_initialize() -> c_int;
+    /// PetscInitialize; with the `mpi` feature, MPI_Init_thread first and both finalized at
+    /// exit (csrc/petsc_mpi.c).
+    #[cfg(not(feature = "mpi"))]
+    #[link_name = "tc_petsc_initialize"]
+    fn tc_initialize() -> c_int;
+    #[cfg(feature = "mpi")]
+    #[link_name = "tc_mpi_initialize"]
+    fn tc_initialize() -> c_int;
     fn tc_petsc_last_error() -> *const c_char;
     fn tc_petsc_int_bits() -> c_int;
     fn tc_amg_create(
@@ -50,7 +57,7 @@ extern "C" {
 }
 
 /// The C layer's record of the last failure.
-fn last_error(code: c_int) -> String {
+pub(super) fn last_error(code: c_int) -> String {
     // SAFETY: the C layer returns a pointer to its static, NUL-terminated buffer.
     let text = unsafe { CStr::from_ptr(tc_petsc_last_error()) }.to_string_lossy();
     if text.is_empty() {
@@ -72,17 +79,19 @@ fn amg_error(detail: String) -> Error {
 /// threads) may set up and apply their AMGs at once.
 static PETSC: Mutex<()> = Mutex::new(());
 
-fn petsc_lock() -> std::sync::MutexGuard<'static, ()> {
+pub(super) fn petsc_lock() -> std::sync::MutexGuard<'static, ()> {
     PETSC.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// PETSc initialized for this process (once; the outcome is kept). Called under the lock.
-fn initialized() -> Result<(), Error> {
+/// With the `mpi` feature, MPI first (thread level SERIALIZED) and both finalized at exit
+/// (`super::mpi`).
+pub(super) fn initialized() -> Result<(), Error> {
     static OUTCOME: OnceLock<Result<(), String>> = OnceLock::new();
     OUTCOME
         .get_or_init(|| {
             // SAFETY: no arguments; the C layer checks PetscInitialized first.
-            match unsafe { tc_petsc_initialize() } {
+            match unsafe { tc_initialize() } {
                 0 => Ok(()),
                 code => Err(last_error(code)),
             }

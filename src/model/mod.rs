@@ -1,7 +1,7 @@
 //! The discrete problem and its state: everything fixed during a run, and what changes.
 //!
 //! Depends on: [`crate::mesh`], [`crate::la`], [`crate::fem`], [`crate::material`],
-//! [`crate::loads`], [`crate::contact`].
+//! [`crate::loads`], [`crate::contact`]; with the `mpi` feature, `crate::partition`.
 //!
 //! - [`Problem`], built by [`ProblemBuilder`] from typed parts (no TOML);
 //! - [`State`]: the fields carried from time level to time level;
@@ -12,9 +12,13 @@
 //! - [`thermal`]: thermal boundary conditions per part ([`ThermalCondition`]);
 //! - [`energy`]: the energies of a step and their balances ([`StepEnergy`]);
 //! - [`plausibility`]: the rigid motions nothing holds, the plausible temperatures;
-//! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls.
+//! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls;
+//! - `DistributedStepMatrix` (feature `mpi`): the step matrix as a PETSc matrix distributed
+//!   by rows over the ranks, and its solve.
 
 mod contact_rows;
+#[cfg(feature = "mpi")]
+mod distributed;
 pub mod energy;
 mod error;
 mod laws;
@@ -28,6 +32,8 @@ mod step_matrix;
 pub mod thermal;
 
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
+#[cfg(feature = "mpi")]
+pub use distributed::{node_unknowns, DistributedStepMatrix};
 pub use energy::{step_energy, StepEnergy};
 pub use error::ModelError;
 pub use laws::{
@@ -37,6 +43,7 @@ pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{
-    assemble_by_columns, ordered_rows, rows_of_symmetric_form, rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
+    assemble_by_columns, ordered_rows, ordered_rows_range, rows_of_symmetric_form, rows_of_symmetric_form_ordered,
+    StepMatrix, StepRhs,
 };
 pub use thermal::{ThermalBoundary, ThermalCondition};

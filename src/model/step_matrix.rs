@@ -108,15 +108,39 @@ pub fn ordered_rows(problem: &Problem, k: f64, order: &[usize]) -> (CsrMatrix, S
 
 /// [`ordered_rows`] with blocks of `rows_per_block` rows.
 fn ordered_rows_in_blocks(problem: &Problem, k: f64, order: &[usize], rows_per_block: usize) -> (CsrMatrix, StepRhs) {
-    let n = order.len();
-    let n_w = problem.velocity.n_free;
     let source = ColumnSource::new(problem, k, order);
+    let (ptr, col, val) = rows_in_blocks(&source, order, rows_per_block);
+    (CsrMatrix::from_rows(order.len(), ptr, col, val), source.rhs())
+}
+
+/// Rows `rows` of P A Pᵀ (row and column i are unknown `order[i]`), as row pointers (from 0),
+/// columns and values: [`ordered_rows`]'s rows, the same bits, for the rows a rank owns in a
+/// distributed run (`crate::model::DistributedStepMatrix`).
+pub fn ordered_rows_range(
+    problem: &Problem,
+    k: f64,
+    order: &[usize],
+    rows: std::ops::Range<usize>,
+) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let source = ColumnSource::new(problem, k, order);
+    rows_in_blocks(&source, &order[rows], ROWS_PER_BLOCK)
+}
+
+/// The rows of P A Pᵀ of the unknowns `unknowns` (row pointers, columns, values), summed in
+/// rounds of one block of `rows_per_block` rows per thread ([`ordered_rows`]).
+fn rows_in_blocks(
+    source: &ColumnSource,
+    unknowns: &[usize],
+    rows_per_block: usize,
+) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let n = source.position.len();
+    let n_w = source.problem.velocity.n_free;
     let threads = rayon::current_num_threads().max(1);
     let mut scratches: Vec<ColumnScratch> = (0..threads).map(|_| ColumnScratch::new(n)).collect();
-    let mut ptr = Vec::with_capacity(n + 1);
+    let mut ptr = Vec::with_capacity(unknowns.len() + 1);
     ptr.push(0);
     let (mut col, mut val) = (Vec::new(), Vec::new());
-    for round in order.chunks(rows_per_block * threads) {
+    for round in unknowns.chunks(rows_per_block * threads) {
         let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (round.par_chunks(rows_per_block))
             .zip(scratches.par_iter_mut())
             .map(|(rows, scratch)| {
@@ -140,7 +164,7 @@ fn ordered_rows_in_blocks(problem: &Problem, k: f64, order: &[usize], rows_per_b
             val.extend_from_slice(&v);
         }
     }
-    (CsrMatrix::from_rows(n, ptr, col, val), source.rhs())
+    (ptr, col, val)
 }
 
 /// Rows of one thread's block in [`ordered_rows`]: ≈ 3 MB of A in 3D, small against A and

@@ -1,0 +1,339 @@
+/* The thin C layer between thermocontact and PETSc + MPI on MPI_COMM_WORLD (cargo feature `mpi`):
+ * the communicator's rank, size, reductions, broadcast, barrier and abort; the partition of a
+ * graph by PETSc's MatPartitioning (PT-Scotch); a distributed AIJ matrix assembled by the COO
+ * API with its Krylov solver (GMRES + block Jacobi/ILU(0) or GAMG), its right-hand side
+ * assembled by PETSc (off-process entries sent by VecAssembly) and its solution gathered on rank 0.
+ *
+ * As csrc/petsc_amg.c: compiled against the installed headers, plain C types across the
+ * boundary (int, long long, double, opaque handles), errors recorded by the handler that
+ * tc_petsc_initialize pushes (tc_petsc_last_error). */
+#include <petscksp.h>
+#include <petscmat.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int tc_petsc_initialize(void);
+
+static int tc_we_initialized_mpi = 0;
+
+/* At exit: PetscFinalize, then MPI_Finalize if this layer started MPI (Open MPI's mpirun
+ * reports a rank that exits without it as failed). */
+static void tc_mpi_finalize(void)
+{
+  PetscBool petsc_done = PETSC_FALSE;
+  int       mpi_done = 0;
+  PetscInitialized(&petsc_done);
+  if (petsc_done) PetscFinalize();
+  MPI_Finalized(&mpi_done);
+  if (tc_we_initialized_mpi && !mpi_done) MPI_Finalize();
+}
+
+/* MPI with MPI_THREAD_SERIALIZED (the calls come from one thread at a time, not always the main
+ * one: Rust's test harness runs tests on threads), then PETSc on MPI_COMM_WORLD, once. */
+int tc_mpi_initialize(void)
+{
+  int done = 0, provided = 0, ierr;
+  MPI_Initialized(&done);
+  if (!done) {
+    ierr = MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided);
+    if (ierr != MPI_SUCCESS) return ierr;
+    tc_we_initialized_mpi = 1;
+    atexit(tc_mpi_finalize);
+  }
+  return tc_petsc_initialize();
+}
+
+int tc_mpi_rank(void)
+{
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  return rank;
+}
+
+int tc_mpi_size(void)
+{
+  int size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  return size;
+}
+
+static MPI_Op tc_op(int op) { return op == 0 ? MPI_SUM : op == 1 ? MPI_MAX : MPI_MIN; }
+
+/* In-place reductions over all ranks: op 0 sum, 1 max, 2 min. */
+int tc_mpi_allreduce_f64(double *values, int n, int op)
+{
+  return MPI_Allreduce(MPI_IN_PLACE, values, n, MPI_DOUBLE, tc_op(op), PETSC_COMM_WORLD);
+}
+
+int tc_mpi_allreduce_u64(unsigned long long *values, int n, int op)
+{
+  return MPI_Allreduce(MPI_IN_PLACE, values, n, MPI_UNSIGNED_LONG_LONG, tc_op(op), PETSC_COMM_WORLD);
+}
+
+/* Rank 0's bytes to every rank (the caller has sized the buffer from a broadcast length). */
+int tc_mpi_broadcast(void *bytes, long long n)
+{
+  char     *p = bytes;
+  long long sent = 0;
+  while (sent < n) { /* counts are int: chunks of 1 GiB */
+    int chunk = (int)(n - sent < (1LL << 30) ? n - sent : (1LL << 30));
+    int ierr = MPI_Bcast(p + sent, chunk, MPI_BYTE, 0, PETSC_COMM_WORLD);
+    if (ierr != MPI_SUCCESS) return ierr;
+    sent += chunk;
+  }
+  return 0;
+}
+
+int tc_mpi_barrier(void) { return MPI_Barrier(PETSC_COMM_WORLD); }
+
+/* Ends every rank: the message once (from the calling rank), then MPI_Abort. */
+void tc_mpi_abort(const char *message, int code)
+{
+  int rank = tc_mpi_rank(), size = tc_mpi_size();
+  fprintf(stderr, "thermocontact (rank %d of %d): %s\n", rank, size, message);
+  fflush(stderr);
+  MPI_Abort(PETSC_COMM_WORLD, code);
+}
+
+/* Partition of the graph (xadj, adjncy: CSR adjacency without self-loops, n vertices) into
+ * n_parts by PETSc's MatPartitioning of type `type` ("ptscotch"), on this rank alone
+ * (PETSC_COMM_SELF). part[v] receives the part of vertex v. */
+int tc_partition_graph(int n, const int *xadj, const int *adjncy, int n_parts, const char *type, int *part)
+{
+  Mat             adj;
+  MatPartitioning partitioning;
+  IS              is;
+  const PetscInt *parts;
+  PetscInt       *i, *j;
+  PetscFunctionBeginUser;
+  /* MatCreateMPIAdj takes the arrays over (freed with the matrix): copies from PetscMalloc. */
+  PetscCall(PetscMalloc1(n + 1, &i));
+  PetscCall(PetscMalloc1(xadj[n], &j));
+  for (int v = 0; v <= n; ++v) i[v] = xadj[v];
+  for (int e = 0; e < xadj[n]; ++e) j[e] = adjncy[e];
+  PetscCall(MatCreateMPIAdj(PETSC_COMM_SELF, n, n, i, j, NULL, &adj));
+  PetscCall(MatPartitioningCreate(PETSC_COMM_SELF, &partitioning));
+  PetscCall(MatPartitioningSetAdjacency(partitioning, adj));
+  PetscCall(MatPartitioningSetNParts(partitioning, n_parts));
+  PetscCall(MatPartitioningSetType(partitioning, type));
+  PetscCall(MatPartitioningSetFromOptions(partitioning));
+  PetscCall(MatPartitioningApply(partitioning, &is));
+  PetscCall(ISGetIndices(is, &parts));
+  for (int v = 0; v < n; ++v) part[v] = (int)parts[v];
+  PetscCall(ISRestoreIndices(is, &parts));
+  PetscCall(ISDestroy(&is));
+  PetscCall(MatPartitioningDestroy(&partitioning));
+  PetscCall(MatDestroy(&adj));
+  PetscFunctionReturn(0);
+}
+
+/* A distributed square matrix (rows [first, first + n_owned) on this rank, global size n_global)
+ * with its pattern from COO pairs, the right-hand side, solution and Krylov solver. */
+struct tc_dist {
+  Mat        A;
+  Vec        b, x;
+  KSP        ksp;
+  PetscCount n_coo;
+};
+typedef struct tc_dist tc_dist;
+
+void tc_dist_destroy(tc_dist *dist)
+{
+  if (!dist) return;
+  KSPDestroy(&dist->ksp);
+  MatDestroy(&dist->A);
+  VecDestroy(&dist->b);
+  VecDestroy(&dist->x);
+  free(dist);
+}
+
+/* The pattern once: n_coo (row, col) pairs in global numbering, any rank may name any row
+ * (PETSc sends the off-process ones and sums repeated pairs). bs: unknowns per block (for GAMG). */
+static PetscErrorCode tc_dist_setup(tc_dist *dist, int n_owned, int n_global, int bs, long long n_coo,
+                                    const int *rows, const int *cols)
+{
+  PetscInt *i, *j;
+  PetscFunctionBeginUser;
+  PetscCall(MatCreate(PETSC_COMM_WORLD, &dist->A));
+  PetscCall(MatSetSizes(dist->A, n_owned, n_owned, n_global, n_global));
+  PetscCall(MatSetType(dist->A, MATAIJ));
+  if (bs > 1) PetscCall(MatSetBlockSize(dist->A, bs));
+  /* MatSetPreallocationCOO may reorder the index arrays it is given: copies. */
+  PetscCall(PetscMalloc2(n_coo, &i, n_coo, &j));
+  for (long long e = 0; e < n_coo; ++e) {
+    i[e] = rows[e];
+    j[e] = cols[e];
+  }
+  PetscCall(MatSetPreallocationCOO(dist->A, (PetscCount)n_coo, i, j));
+  PetscCall(PetscFree2(i, j));
+  dist->n_coo = (PetscCount)n_coo;
+  PetscCall(MatCreateVecs(dist->A, &dist->x, &dist->b));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_create(int n_owned, int n_global, int bs, long long n_coo, const int *rows, const int *cols,
+                   tc_dist **out)
+{
+  PetscErrorCode ierr;
+  *out = NULL;
+  tc_dist *dist = calloc(1, sizeof *dist);
+  if (!dist) return PETSC_ERR_MEM;
+  ierr = tc_dist_setup(dist, n_owned, n_global, bs, n_coo, rows, cols);
+  if (ierr) {
+    tc_dist_destroy(dist);
+    return (int)ierr;
+  }
+  *out = dist;
+  return 0;
+}
+
+/* The values of the COO pairs, in their order (repeated pairs summed); collective. */
+int tc_dist_set_values(tc_dist *dist, const double *values)
+{
+  return (int)MatSetValuesCOO(dist->A, values, INSERT_VALUES);
+}
+
+/* The Krylov solver on the current values: GMRES(restart) with block Jacobi + ILU(0)
+ * (preconditioner 0) or GAMG (1), relative tolerance rtol, at most max_its iterations; options
+ * under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
+static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
+{
+  PC pc;
+  PetscFunctionBeginUser;
+  PetscCall(KSPDestroy(&dist->ksp));
+  PetscCall(KSPCreate(PETSC_COMM_WORLD, &dist->ksp));
+  PetscCall(KSPSetOptionsPrefix(dist->ksp, "tc_dist_"));
+  PetscCall(KSPSetOperators(dist->ksp, dist->A, dist->A));
+  PetscCall(KSPSetType(dist->ksp, KSPGMRES));
+  PetscCall(KSPGMRESSetRestart(dist->ksp, restart));
+  PetscCall(KSPSetTolerances(dist->ksp, rtol, 0.0, PETSC_DEFAULT, max_its));
+  PetscCall(KSPSetNormType(dist->ksp, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPSetPCSide(dist->ksp, PC_RIGHT));
+  PetscCall(KSPGetPC(dist->ksp, &pc));
+  if (preconditioner == 1) {
+    PetscCall(PCSetType(pc, PCGAMG));
+  } else {
+    /* Block Jacobi, one block per rank, each ILU(0) (PETSc's default sub-solver). */
+    PetscCall(PCSetType(pc, PCBJACOBI));
+  }
+  PetscCall(KSPSetFromOptions(dist->ksp));
+  PetscCall(KSPSetUp(dist->ksp));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_krylov(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
+{
+  return (int)tc_dist_krylov_setup(dist, preconditioner, rtol, max_its, restart);
+}
+
+/* b = 0, then b[index[e]] += value[e] for this rank's n entries (any rank may name any row),
+ * assembled by PETSc. */
+int tc_dist_set_rhs(tc_dist *dist, long long n, const int *index, const double *value)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecZeroEntries(dist->b));
+  for (long long e = 0; e < n; ++e) {
+    PetscInt i = index[e];
+    PetscCall(VecSetValues(dist->b, 1, &i, &value[e], ADD_VALUES));
+  }
+  PetscCall(VecAssemblyBegin(dist->b));
+  PetscCall(VecAssemblyEnd(dist->b));
+  PetscFunctionReturn(0);
+}
+
+/* Solves A x = b from x = 0; the owned part of x into `owned` (n_owned values); iterations,
+ * the final relative residual ‖b − Ax‖/‖b‖ and the converged reason (> 0: converged). */
+int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residual, int *reason)
+{
+  PetscInt           its, n;
+  PetscReal          rnorm, bnorm;
+  KSPConvergedReason why;
+  const PetscScalar *x;
+  PetscFunctionBeginUser;
+  PetscCall(VecZeroEntries(dist->x));
+  PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
+  PetscCall(KSPGetIterationNumber(dist->ksp, &its));
+  PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
+  PetscCall(KSPGetConvergedReason(dist->ksp, &why));
+  PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
+  PetscCall(VecGetLocalSize(dist->x, &n));
+  PetscCall(VecGetArrayRead(dist->x, &x));
+  memcpy(owned, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(dist->x, &x));
+  *iterations = (int)its;
+  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  *reason = (int)why;
+  PetscFunctionReturn(0);
+}
+
+/* The whole solution on rank 0 (n_global values into `all` there; `all` unused elsewhere),
+ * by PETSc's scatter to zero; collective. */
+int tc_dist_gather(tc_dist *dist, double *all)
+{
+  VecScatter         scatter;
+  Vec                whole;
+  const PetscScalar *x;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  PetscCall(VecScatterCreateToZero(dist->x, &scatter, &whole));
+  PetscCall(VecScatterBegin(scatter, dist->x, whole, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(scatter, dist->x, whole, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(whole, &n));
+  if (n > 0) {
+    PetscCall(VecGetArrayRead(whole, &x));
+    memcpy(all, x, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArrayRead(whole, &x));
+  }
+  PetscCall(VecScatterDestroy(&scatter));
+  PetscCall(VecDestroy(&whole));
+  PetscFunctionReturn(0);
+}
+
+/* A vector with ghost entries (VecGhost): n_owned owned entries (PETSc's layout), then copies of
+ * the n_ghost global entries `ghosts`, refreshed from their owners by tc_ghost_update. */
+int tc_ghost_create(int n_owned, int n_ghost, const int *ghosts, Vec *out)
+{
+  PetscInt *g;
+  PetscFunctionBeginUser;
+  *out = NULL;
+  PetscCall(PetscMalloc1(n_ghost, &g));
+  for (int i = 0; i < n_ghost; ++i) g[i] = ghosts[i];
+  PetscCall(VecCreateGhost(PETSC_COMM_WORLD, n_owned, PETSC_DECIDE, n_ghost, g, out));
+  PetscCall(PetscFree(g));
+  PetscFunctionReturn(0);
+}
+
+/* The owned entries from `owned`, then every ghost from its owner (VecGhostUpdate, forward). */
+int tc_ghost_set_and_update(Vec v, const double *owned)
+{
+  PetscScalar *x;
+  PetscInt     n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(v, &n));
+  PetscCall(VecGetArrayWrite(v, &x));
+  memcpy(x, owned, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayWrite(v, &x));
+  PetscCall(VecGhostUpdateBegin(v, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGhostUpdateEnd(v, INSERT_VALUES, SCATTER_FORWARD));
+  PetscFunctionReturn(0);
+}
+
+/* The local form: owned entries then ghosts (n_local values into `local`). */
+int tc_ghost_local(Vec v, double *local, int n_local)
+{
+  Vec                form;
+  const PetscScalar *x;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGhostGetLocalForm(v, &form));
+  PetscCall(VecGetLocalSize(form, &n));
+  PetscCheck(n == n_local, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ, "local form of %d entries, %d expected", (int)n, n_local);
+  PetscCall(VecGetArrayRead(form, &x));
+  memcpy(local, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(form, &x));
+  PetscCall(VecGhostRestoreLocalForm(v, &form));
+  PetscFunctionReturn(0);
+}
+
+void tc_ghost_destroy(Vec v) { VecDestroy(&v); }
