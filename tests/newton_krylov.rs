@@ -138,19 +138,24 @@ fn the_papers_solver_on_the_iterative_path_runs_the_direct_paths_iterates() {
             iterative_summary.convexification_iterations
         );
         assert_eq!(direct_summary.inner_iterations, iterative_summary.inner_iterations);
-        let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-        let rel = |a: &[f64], b: &[f64]| {
-            let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-            max_abs(&d) / max_abs(a)
-        };
-        for (name, a, b) in [
-            ("u", &direct.u, &iterative.u),
-            ("w", &direct.w, &iterative.w),
-            ("θ", &direct.theta, &iterative.theta),
-            ("ξ", &direct.xi, &iterative.xi),
-        ] {
-            assert!(rel(a, b) < 1e-7, "{name} differs by {:e}", rel(a, b));
-        }
+        assert_fields_agree(&direct, &iterative, 1e-7, "paper");
+    }
+}
+
+/// u, w, θ and ξ of `b` within `tolerance` of `a`'s, relative to a's largest entry.
+fn assert_fields_agree(a: &State, b: &State, tolerance: f64, case: &str) {
+    let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+    let rel = |a: &[f64], b: &[f64]| {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+        max_abs(&d) / max_abs(a)
+    };
+    for (name, x, y) in [
+        ("u", &a.u, &b.u),
+        ("w", &a.w, &b.w),
+        ("θ", &a.theta, &b.theta),
+        ("ξ", &a.xi, &b.xi),
+    ] {
+        assert!(rel(x, y) < tolerance, "{case}: {name} differs by {:e}", rel(x, y));
     }
 }
 
@@ -333,19 +338,7 @@ fn newton_on_the_law_finishes_the_steps_the_loop_cannot() {
             "law residual {:e}",
             summary.max_law_residual
         );
-        let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-        let rel = |a: &[f64], b: &[f64]| {
-            let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-            max_abs(&d) / max_abs(a)
-        };
-        for (name, a, b) in [
-            ("u", &by_loop.u, &by_newton.u),
-            ("w", &by_loop.w, &by_newton.w),
-            ("θ", &by_loop.theta, &by_newton.theta),
-            ("ξ", &by_loop.xi, &by_newton.xi),
-        ] {
-            assert!(rel(a, b) < 1e-7, "{cap}: {name} differs by {:e}", rel(a, b));
-        }
+        assert_fields_agree(&by_loop, &by_newton, 1e-7, cap);
         for (a, b) in loop_summary.outputs.iter().zip(&summary.outputs) {
             let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
             assert_eq!(status(&a.contact), status(&b.contact), "node statuses at t = {}", a.t);
