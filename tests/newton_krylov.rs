@@ -82,19 +82,19 @@ fn iterative_path_matches_the_direct_path_in_3d() {
     compare(Some(PAPER3D), &SYMMETRIC_3D);
 }
 
+/// The coarse 3D example with Tresca's law (a unique solution).
+const TRESCA_3D: [&str; 6] = [
+    "mesh.nx=12",
+    "mesh.ny=3",
+    "mesh.nz=3",
+    "time.steps=8",
+    "friction.law=tresca",
+    "friction.bound=60",
+];
+
 #[test]
 fn iterative_path_matches_the_direct_path_with_tresca_friction() {
-    compare(
-        Some(PAPER3D),
-        &[
-            "mesh.nx=12",
-            "mesh.ny=3",
-            "mesh.nz=3",
-            "time.steps=8",
-            "friction.law=tresca",
-            "friction.bound=60",
-        ],
-    );
+    compare(Some(PAPER3D), &TRESCA_3D);
 }
 
 /// With the AMG coarse correction (`solver.preconditioner = "amg"`, feature `petsc`) the
@@ -309,18 +309,7 @@ fn newton_on_the_law_finishes_the_steps_the_loop_cannot() {
             vec!["mesh.nx=32", "mesh.ny=8", "time.steps=16"],
             "solver.max_convexification=3",
         ),
-        (
-            Some(PAPER3D),
-            vec![
-                "mesh.nx=12",
-                "mesh.ny=3",
-                "mesh.nz=3",
-                "time.steps=8",
-                "friction.law=tresca",
-                "friction.bound=60",
-            ],
-            "solver.max_convexification=1",
-        ),
+        (Some(PAPER3D), TRESCA_3D.to_vec(), "solver.max_convexification=1"),
     ];
     for (file, sets, cap) in cases {
         let (loop_summary, by_loop) = run(file, &sets, "iterative");
