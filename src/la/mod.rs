@@ -26,7 +26,7 @@ pub mod vector;
 
 pub use error::{FactorStage, LaError};
 pub use gmres::{gmres, gmres_from_residual, GmresParams, Preconditioner, SolveInfo};
-pub use graph::{level_bisection, NodeGraph, Part};
+pub use graph::{level_bisection, NodeCells, NodeGraph, Part};
 pub use ilu::Ilu0;
 pub use ldlt::QuasiDefiniteLdlt;
 pub use sparse::{ColumnsMut, CscMatrix, CsrMatrix};
