@@ -1,12 +1,28 @@
-//! Global assembly: scatter element kernels into matrices whose pattern comes from the node
-//! graph, and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature
-//! dof p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
+//! Global assembly: sum element kernels into matrices whose pattern comes from the node graph,
+//! and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature dof
+//! p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
 //!
-//! The sweep adds each cell's kernels at positions known from the node graph: one search for a
-//! node pair's place in its column serves the eight matrices ([`CscMatrix::from_graph`]'s
-//! layout). A binary search per entry (39 per node pair in 3D) took 40 % of the CPU time of a
-//! one-step run of the 3D example at 291k unknowns (`perf record`); without it the assembly takes
-//! 5.3–10 s against 14–26 s before, interleaved on the same loaded machine (docs/performance.md).
+//! The sweep goes by nodes, not by cells. A node q's columns of each matrix lie one after the
+//! other in [`CscMatrix::from_graph`]'s layout (≈ 1 KB per vector matrix in 3D), and entry (p, q)
+//! is Σ_e K^e_pq over the cells e holding p and q. For each q, its columns of the eight matrices
+//! are summed over q's cells in increasing order, each cell giving its kernels' columns of q
+//! (`kernels::*_column`): every entry is summed as a sweep over the cells sums it, term by term
+//! in the same order, so the bits are the same on any number of threads, and blocks of 2048
+//! nodes balance the two cores. The sums stay in the cache and each of the 1.3 GB of values at
+//! 10⁶ unknowns is written once, its page first by a store (a read maps the zero page, and the
+//! write after it faults a second time). The kernels are computed a column at a time, four
+//! times per cell: the same flops as the whole local matrices once.
+//!
+//! Measured on the 3D example at 972k unknowns (one step, release, interleaved with the binary
+//! before on the shared 2-core machine; docs/performance.md): the assembly 2.9–5.2 s against
+//! 6.5–7.1 s at load 3–4. Rejected: the sweep over the cells that added each cell's whole
+//! kernels into the columns of its nodes, each thread owning half of the nodes (5.6–6.1 s on
+//! the idle machine): 47 % of its time in the scattered `+=` (an entry's column revisited from
+//! cells far apart in the sweep, 1.3 GB of values behind 4 KB pages), each page faulted twice;
+//! partial matrices per thread, summed at the end, round differently per thread count. What is
+//! left is near the floor of this virtual machine: a fresh page costs ≈ 0.85 s per GB on first
+//! touch (1.2 GB/s, against 15 GB/s for rewriting touched memory), 1.1 s of CPU for the values
+//! alone.
 
 use rayon::prelude::*;
 

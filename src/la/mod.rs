@@ -8,8 +8,8 @@
 //! - [`QuasiDefiniteLdlt`]: the LDLᵀ of a symmetric quasi-definite matrix with a trailing block
 //!   read on its own;
 //! - [`Ilu0`] and [`gmres`]: the incomplete factor and the restarted Krylov method;
-//! - [`NodeGraph`] and [`level_bisection`]: the cell graph of the nodes and its two-way split
-//!   for the parallel sweeps;
+//! - [`NodeCells`], [`NodeGraph`] and [`level_bisection`]: the cells of each node, the cell
+//!   graph of the nodes and its two-way split for the parallel sweeps;
 //! - `petsc` (feature `petsc`): the thin binding to PETSc's GAMG.
 //!
 //! Errors: [`LaError`], with the stage of a factorization that failed ([`FactorStage`]).
