@@ -1,17 +1,33 @@
-//! Global assembly: scatter element kernels into matrices whose pattern comes from the node
-//! graph, and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature
-//! dof p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
+//! Global assembly: sum element kernels into matrices whose pattern comes from the node graph,
+//! and integrate loads. Full nodal numbering: velocity dof (p, c) ↦ p·d + c, temperature dof
+//! p ↦ p. Constraints are applied later by the constrained spaces E^h and V^h (`dofs`).
 //!
-//! The sweep adds each cell's kernels at positions known from the node graph: one search for a
-//! node pair's place in its column serves the eight matrices ([`CscMatrix::from_graph`]'s
-//! layout). A binary search per entry (39 per node pair in 3D) took 40 % of the CPU time of a
-//! one-step run of the 3D example at 291k unknowns (`perf record`); without it the assembly takes
-//! 5.3–10 s against 14–26 s before, interleaved on the same loaded machine (docs/performance.md).
+//! The sweep goes by nodes, not by cells. A node q's columns of each matrix lie one after the
+//! other in [`CscMatrix::from_graph`]'s layout (≈ 1 KB per vector matrix in 3D), and entry (p, q)
+//! is Σ_e K^e_pq over the cells e holding p and q. For each q, its columns of the eight matrices
+//! are summed over q's cells in increasing order, each cell giving its kernels' columns of q
+//! (`kernels::*_column`): every entry is summed as a sweep over the cells sums it, term by term
+//! in the same order, so the bits are the same on any number of threads, and blocks of 2048
+//! nodes balance the two cores. The sums stay in the cache and each of the 1.3 GB of values at
+//! 10⁶ unknowns is written once, its page first by a store (a read maps the zero page, and the
+//! write after it faults a second time). The kernels are computed a column at a time, four
+//! times per cell: the same flops as the whole local matrices once.
+//!
+//! Measured on the 3D example at 972k unknowns (one step, release, interleaved with the binary
+//! before on the shared 2-core machine; docs/performance.md): the assembly 2.9–5.2 s against
+//! 6.5–7.1 s at load 3–4. Rejected: the sweep over the cells that added each cell's whole
+//! kernels into the columns of its nodes, each thread owning half of the nodes (5.6–6.1 s on
+//! the idle machine): 47 % of its time in the scattered `+=` (an entry's column revisited from
+//! cells far apart in the sweep, 1.3 GB of values behind 4 KB pages), each page faulted twice;
+//! partial matrices per thread, summed at the end, round differently per thread count. What is
+//! left is near the floor of this virtual machine: a fresh page costs ≈ 0.85 s per GB on first
+//! touch (1.2 GB/s, against 15 GB/s for rewriting touched memory), 1.1 s of CPU for the values
+//! alone.
 
 use rayon::prelude::*;
 
 use super::kernels;
-use crate::la::{ColumnsMut, CscMatrix, NodeGraph};
+use crate::la::{ColumnsMut, CscMatrix, NodeCells, NodeGraph};
 use crate::material::{CellMaterials, Isotropic, Material};
 use crate::mesh::simplex::{facet_measure, Simplex};
 use crate::mesh::Mesh;
@@ -54,14 +70,16 @@ pub fn assemble_cell_materials(
     robin_coefficient: f64,
 ) -> Matrices {
     let d = mesh.dim;
-    let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
+    let nodes_per_cell = mesh.nodes_per_cell();
+    let node_cells = NodeCells::new(mesh.n_nodes(), &mesh.cells, nodes_per_cell);
+    let graph = NodeGraph::from_node_cells(&node_cells, &mesh.cells, nodes_per_cell);
     let vector = CscMatrix::from_graph(&graph, d, d);
     let scalar = CscMatrix::from_graph(&graph, 1, 1);
     let coupling = CscMatrix::from_graph(&graph, d, 1);
     // Order: mass, viscosity, elasticity, coupling, heat mass, conduction, energy, gradient.
     // Fresh zeros share the pattern and are not copied: the pages are mapped zero and written
     // once, by the sweep (a clone of the zero template read and wrote 0.5 GB more at 291k unknowns).
-    let templates = vec![
+    let mut mats = vec![
         vector.zeros_like(),
         vector.zeros_like(),
         vector.zeros_like(),
@@ -71,66 +89,30 @@ pub fn assemble_cell_materials(
         vector,
         scalar,
     ];
-    let strain_gram = Isotropic {
-        lambda: 0.0,
-        two_mu: 1.0,
-    };
-    // Each thread owns the columns of a range of nodes and adds every cell's contributions to
-    // them in cell order: every entry is then summed in the same order as a sequential sweep,
-    // so the matrices (and the whole run) are bitwise the same on any number of threads.
-    // (Partial matrices per thread, summed at the end, round differently per thread count.)
-    // A cell with nodes in two ranges is integrated by both threads.
+    // Blocks of consecutive nodes, each block's columns summed by one thread: every entry is
+    // summed in the same order (its cells' in increasing order, as a sequential sweep over the
+    // cells adds them), so the matrices (and the whole run) are bitwise the same on any number
+    // of threads. (Partial matrices per thread, summed at the end, round differently per
+    // thread count.)
     let n_nodes = mesh.n_nodes();
-    let n_blocks = rayon::current_num_threads().clamp(1, n_nodes.max(1));
-    let bounds: Vec<usize> = (0..=n_blocks).map(|b| b * n_nodes / n_blocks).collect();
-    let mut mats = templates;
+    let bounds: Vec<usize> = (0..n_nodes).step_by(NODES_PER_BLOCK).chain([n_nodes]).collect();
     // Columns per node: vector matrices d, the coupling and scalar matrices 1 (temperature).
     let cols_per_node = [d, d, d, 1, 1, 1, d, 1];
-    let mut blocks: Vec<Vec<ColumnsMut>> = (0..n_blocks).map(|_| Vec::with_capacity(8)).collect();
+    let mut blocks: Vec<Vec<ColumnsMut>> = (1..bounds.len()).map(|_| Vec::with_capacity(8)).collect();
     for (mat, &c) in mats.iter_mut().zip(&cols_per_node) {
         for (block, columns) in blocks.iter_mut().zip(mat.split_columns_mut(&bounds, c)) {
             block.push(columns);
         }
     }
     blocks.into_par_iter().enumerate().for_each(|(b, mut m)| {
-        let owned = bounds[b]..bounds[b + 1];
-        for e in 0..mesh.n_cells() {
-            let nodes = mesh.cell(e);
-            if !nodes.iter().any(|q| owned.contains(q)) {
-                continue;
-            }
-            let material = materials.of(e);
-            let t = Simplex::new(d, &mesh.cell_coords(e));
-            let mass = kernels::scalar_mass(&t);
-            let lap = kernels::laplacian(&t);
-            let visc = kernels::isotropic_stiffness(&t, material.viscosity);
-            let elast = kernels::isotropic_stiffness(&t, material.elasticity);
-            let gram = kernels::isotropic_stiffness(&t, strain_gram);
-            let div = kernels::divergence_coupling(&t);
-            for (bq, &q) in nodes.iter().enumerate() {
-                if !owned.contains(&q) {
-                    continue;
-                }
-                let neighbours = graph.neighbours(q);
-                for (a, &p) in nodes.iter().enumerate() {
-                    // Node p's rows in node q's columns: one search for the eight matrices.
-                    let k = neighbours.binary_search(&p).expect("cell nodes are neighbours");
-                    for i in 0..d {
-                        let row = k * d + i;
-                        m[0].add_at(q * d + i, row, material.density * mass[a][bq]);
-                        for j in 0..d {
-                            let (col, (ai, bj)) = (q * d + j, (a * d + i, bq * d + j));
-                            m[1].add_at(col, row, visc[ai][bj]);
-                            m[2].add_at(col, row, elast[ai][bj]);
-                            m[6].add_at(col, row, gram[ai][bj]);
-                        }
-                        m[3].add_at(q, row, material.expansion * div[a * d + i][bq]);
-                    }
-                    m[4].add_at(q, k, material.density * material.heat_capacity * mass[a][bq]);
-                    m[5].add_at(q, k, material.conductivity * lap[a][bq]);
-                    m[7].add_at(q, k, lap[a][bq]);
-                }
-            }
+        for q in bounds[b]..bounds[b + 1] {
+            let mut node: Vec<&mut [f64]> = (m.iter_mut().zip(&cols_per_node))
+                .map(|(columns, &c)| columns.columns(q * c..(q + 1) * c))
+                .collect();
+            // Stored zeros: each page is first written, not read (a read maps the zero page,
+            // and the write after it faults a second time).
+            node.iter_mut().for_each(|columns| columns.fill(0.0));
+            add_node_columns(mesh, materials, (graph.neighbours(q), node_cells.of(q)), q, &mut node);
         }
     });
     let [mass, viscosity, elasticity, coupling, heat_mass, mut conduction, energy_gram, gradient_gram]: [CscMatrix; 8] =
@@ -145,6 +127,59 @@ pub fn assemble_cell_materials(
         conduction,
         energy_gram,
         gradient_gram,
+    }
+}
+
+/// Nodes per block of the assembly's sweep: a block's columns are summed by one thread, and
+/// many blocks balance the two cores of a shared machine.
+const NODES_PER_BLOCK: usize = 2048;
+
+/// Adds to node q's columns of the eight matrices (`m`: each matrix's columns of q, one after
+/// the other, in [`Matrices`]' order) the kernels' columns of q in each of q's cells, in
+/// increasing cell order. `neighbours` are q's sorted neighbours: node p's rows in a column of
+/// q are at k·r, k the place of p among them and r the rows per node ([`CscMatrix::from_graph`]).
+fn add_node_columns(
+    mesh: &Mesh,
+    materials: &CellMaterials,
+    (neighbours, cells): (&[usize], &[usize]),
+    q: usize,
+    m: &mut [&mut [f64]],
+) {
+    let d = mesh.dim;
+    // The length of a column of q: nodal rows d (vector, coupling) or 1 (scalar).
+    let column = neighbours.len() * d;
+    let strain_gram = Isotropic {
+        lambda: 0.0,
+        two_mu: 1.0,
+    };
+    for &e in cells {
+        let nodes = mesh.cell(e);
+        let bq = nodes.iter().position(|&p| p == q).expect("a node of its cell");
+        let material = materials.of(e);
+        let t = Simplex::new(d, &mesh.cell_coords(e));
+        let mass = kernels::scalar_mass_column(&t, bq);
+        let lap = kernels::laplacian_column(&t, bq);
+        let visc = kernels::isotropic_stiffness_columns(&t, material.viscosity, bq);
+        let elast = kernels::isotropic_stiffness_columns(&t, material.elasticity, bq);
+        let gram = kernels::isotropic_stiffness_columns(&t, strain_gram, bq);
+        let div = kernels::divergence_coupling_column(&t, bq);
+        for (a, &p) in nodes.iter().enumerate() {
+            let k = neighbours.binary_search(&p).expect("cell nodes are neighbours");
+            for i in 0..d {
+                let (row, ai) = (k * d + i, a * d + i);
+                m[0][i * column + row] += material.density * mass[a];
+                for j in 0..d {
+                    let entry = j * column + row;
+                    m[1][entry] += visc[ai][j];
+                    m[2][entry] += elast[ai][j];
+                    m[6][entry] += gram[ai][j];
+                }
+                m[3][row] += material.expansion * div[ai];
+            }
+            m[4][k] += material.density * material.heat_capacity * mass[a];
+            m[5][k] += material.conductivity * lap[a];
+            m[7][k] += lap[a];
+        }
     }
 }
 
@@ -252,6 +287,107 @@ mod tests {
     fn assembled_on(threads: usize, mesh: &Mesh, material: &Material) -> Matrices {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| assemble_matrices(mesh, material, &[0], 2.5))
+    }
+
+    /// The matrices of a sequential sweep over the cells that adds each cell's whole local
+    /// matrices entry by entry (the assembly before the node-column sweep; `add` searches each
+    /// entry), with the body's one material and the Robin term on part 0.
+    fn scattered_by_cells(mesh: &Mesh, material: &Material) -> Vec<CscMatrix> {
+        let d = mesh.dim;
+        let graph = NodeGraph::new(mesh.n_nodes(), &mesh.cells, mesh.nodes_per_cell());
+        let (vector, scalar) = (CscMatrix::from_graph(&graph, d, d), CscMatrix::from_graph(&graph, 1, 1));
+        let mut m = vec![
+            vector.clone(),
+            vector.clone(),
+            vector.clone(),
+            CscMatrix::from_graph(&graph, d, 1),
+        ];
+        m.extend([scalar.clone(), scalar.clone(), vector, scalar]);
+        let gram = Isotropic {
+            lambda: 0.0,
+            two_mu: 1.0,
+        };
+        for e in 0..mesh.n_cells() {
+            let t = Simplex::new(d, &mesh.cell_coords(e));
+            let (mass, lap, div) = (
+                kernels::scalar_mass(&t),
+                kernels::laplacian(&t),
+                kernels::divergence_coupling(&t),
+            );
+            let stiffness =
+                [material.viscosity, material.elasticity, gram].map(|law| kernels::isotropic_stiffness(&t, law));
+            let nodes = mesh.cell(e);
+            for (b, &q) in nodes.iter().enumerate() {
+                for (a, &p) in nodes.iter().enumerate() {
+                    for i in 0..d {
+                        m[0].add(p * d + i, q * d + i, material.density * mass[a][b]);
+                        for j in 0..d {
+                            for (mat, k) in [1, 2, 6].into_iter().zip(&stiffness) {
+                                m[mat].add(p * d + i, q * d + j, k[a * d + i][b * d + j]);
+                            }
+                        }
+                        m[3].add(p * d + i, q, material.expansion * div[a * d + i][b]);
+                    }
+                    m[4].add(p, q, material.density * material.heat_capacity * mass[a][b]);
+                    m[5].add(p, q, material.conductivity * lap[a][b]);
+                    m[7].add(p, q, lap[a][b]);
+                }
+            }
+        }
+        add_boundary_mass(mesh, &[0], 2.5, &mut m[5]);
+        m
+    }
+
+    /// The node-column sweep sums every entry as the sweep over the cells does, to the bit, in
+    /// 2D and 3D: the cells of a node in increasing order, each cell's columns of the node.
+    #[test]
+    fn node_columns_are_the_sums_of_a_sweep_over_the_cells() {
+        let material = Material {
+            density: 100.0,
+            heat_capacity: 1.3,
+            viscosity: Isotropic::viscosity(100.0, 100.0),
+            elasticity: Isotropic::elasticity(10_000.0, 0.3),
+            expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
+            conductivity: 0.1,
+            reference_temperature: 0.0,
+        };
+        for mesh in [
+            crate::mesh::rectangle(3.0, 1.0, 7, 3),
+            crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
+        ] {
+            let swept = assemble_matrices(&mesh, &material, &[0], 2.5);
+            let reference = scattered_by_cells(&mesh, &material);
+            let bits = |m: &CscMatrix| m.values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            for (name, (a, b)) in [
+                "mass",
+                "viscosity",
+                "elasticity",
+                "coupling",
+                "heat mass",
+                "conduction",
+                "energy gram",
+                "gradient gram",
+            ]
+            .iter()
+            .zip(
+                [
+                    &swept.mass,
+                    &swept.viscosity,
+                    &swept.elasticity,
+                    &swept.coupling,
+                    &swept.heat_mass,
+                    &swept.conduction,
+                    &swept.energy_gram,
+                    &swept.gradient_gram,
+                ]
+                .into_iter()
+                .zip(&reference),
+            ) {
+                assert_eq!(a.row_idx, b.row_idx, "{name}");
+                assert_eq!(bits(a), bits(b), "{name}, d = {}", mesh.dim);
+                assert!(a.values.iter().any(|&v| v != 0.0), "{name}");
+            }
+        }
     }
 
     /// The same bits on 1, 2 and 3 threads, in 2D and 3D: a run does not depend on the machine.

@@ -2,53 +2,89 @@
 //!
 //! Local vector dofs are ordered node-major: (a, i) ↦ a·d + i for node a ≤ d and component
 //! i < d. All integrands are polynomials integrated exactly.
+//!
+//! The assembly takes each kernel one local node's columns at a time (`*_column`), as it sums
+//! a node's columns over the node's cells (`super::assembly`); the whole local matrices are
+//! those columns side by side, kept for the tests.
 
 use crate::material::Isotropic;
 use crate::mesh::simplex::Simplex;
 
+#[cfg(test)]
 /// ∫_T λ_a λ_b = |T| (1 + δ_ab) / ((d + 1)(d + 2)): the consistent scalar mass.
 pub fn scalar_mass(t: &Simplex) -> [[f64; 4]; 4] {
+    full_from_columns(t, scalar_mass_column)
+}
+
+/// Column b of the consistent scalar mass: entry a is ∫_T λ_a λ_b.
+pub fn scalar_mass_column(t: &Simplex, b: usize) -> [f64; 4] {
     let n = t.dim + 1;
     let scale = t.measure / ((n * (n + 1)) as f64);
+    let mut m = [0.0; 4];
+    for (a, v) in m.iter_mut().enumerate().take(n) {
+        *v = if a == b { 2.0 * scale } else { scale };
+    }
+    m
+}
+
+#[cfg(test)]
+/// A scalar kernel's 4 × 4 matrix from its columns.
+fn full_from_columns(t: &Simplex, column: impl Fn(&Simplex, usize) -> [f64; 4]) -> [[f64; 4]; 4] {
     let mut m = [[0.0; 4]; 4];
-    for (a, row) in m.iter_mut().enumerate().take(n) {
-        for (b, v) in row.iter_mut().enumerate().take(n) {
-            *v = if a == b { 2.0 * scale } else { scale };
+    for b in 0..=t.dim {
+        for (row, v) in m.iter_mut().zip(column(t, b)) {
+            row[b] = v;
         }
     }
     m
 }
 
+#[cfg(test)]
 /// ∫_T ∇λ_a · ∇λ_b: the P1 stiffness of −Δ.
 pub fn laplacian(t: &Simplex) -> [[f64; 4]; 4] {
-    let n = t.dim + 1;
-    let mut m = [[0.0; 4]; 4];
-    for a in 0..n {
-        for b in 0..n {
-            m[a][b] = t.measure * (0..t.dim).map(|r| t.grads[a][r] * t.grads[b][r]).sum::<f64>();
-        }
+    full_from_columns(t, laplacian_column)
+}
+
+/// Column b of the P1 stiffness of −Δ: entry a is ∫_T ∇λ_a · ∇λ_b.
+pub fn laplacian_column(t: &Simplex, b: usize) -> [f64; 4] {
+    let mut m = [0.0; 4];
+    for (a, v) in m.iter_mut().enumerate().take(t.dim + 1) {
+        *v = t.measure * (0..t.dim).map(|r| t.grads[a][r] * t.grads[b][r]).sum::<f64>();
     }
     m
 }
 
+#[cfg(test)]
 /// ∫_T 𝒯ε(λ_b e_j) : ε(λ_a e_i) at local entry ((a,i), (b,j)), for an isotropic 𝒯 = (λ, 2μ):
 /// |T| [λ ∂_i λ_a ∂_j λ_b + μ (∇λ_a·∇λ_b δ_ij + ∂_j λ_a ∂_i λ_b)].
 pub fn isotropic_stiffness(t: &Simplex, law: Isotropic) -> [[f64; 12]; 12] {
+    let d = t.dim;
+    let mut k = [[0.0; 12]; 12];
+    for b in 0..=d {
+        let columns = isotropic_stiffness_columns(t, law, b);
+        for (row, column) in k.iter_mut().zip(&columns) {
+            row[b * d..(b + 1) * d].copy_from_slice(&column[..d]);
+        }
+    }
+    k
+}
+
+/// The d columns (b, j) of local node b of the isotropic stiffness: entry `[a·d + i][j]` is
+/// ∫_T 𝒯ε(λ_b e_j) : ε(λ_a e_i) = |T| [λ ∂_i λ_a ∂_j λ_b + μ (∇λ_a·∇λ_b δ_ij + ∂_j λ_a ∂_i λ_b)].
+pub fn isotropic_stiffness_columns(t: &Simplex, law: Isotropic, b: usize) -> [[f64; 3]; 12] {
     let (d, n) = (t.dim, t.dim + 1);
     let mu = 0.5 * law.two_mu;
     let g = &t.grads;
-    let mut k = [[0.0; 12]; 12];
+    let mut k = [[0.0; 3]; 12];
     for a in 0..n {
-        for b in 0..n {
-            let dot: f64 = (0..d).map(|r| g[a][r] * g[b][r]).sum();
-            for i in 0..d {
-                for j in 0..d {
-                    let mut v = law.lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i];
-                    if i == j {
-                        v += mu * dot;
-                    }
-                    k[a * d + i][b * d + j] = t.measure * v;
+        let dot: f64 = (0..d).map(|r| g[a][r] * g[b][r]).sum();
+        for i in 0..d {
+            for j in 0..d {
+                let mut v = law.lambda * g[a][i] * g[b][j] + mu * g[a][j] * g[b][i];
+                if i == j {
+                    v += mu * dot;
                 }
+                k[a * d + i][j] = t.measure * v;
             }
         }
     }
@@ -58,13 +94,22 @@ pub fn isotropic_stiffness(t: &Simplex, law: Isotropic) -> [[f64; 12]; 12] {
 /// ∫_T λ_b div(λ_a e_i) = ∂_i λ_a |T| / (d + 1) at local entry ((a,i), b): the coupling
 /// G_ij = ∫ c ψ_j div φ_i for C = c I, without the factor c.
 pub fn divergence_coupling(t: &Simplex) -> [[f64; 4]; 12] {
-    let (d, n) = (t.dim, t.dim + 1);
     let mut m = [[0.0; 4]; 12];
+    for b in 0..=t.dim {
+        for (row, v) in m.iter_mut().zip(divergence_coupling_column(t, b)) {
+            row[b] = v;
+        }
+    }
+    m
+}
+
+/// Column b of [`divergence_coupling`] (the same for every b: ψ_b integrates to |T| / (d + 1)).
+pub fn divergence_coupling_column(t: &Simplex, _b: usize) -> [f64; 12] {
+    let (d, n) = (t.dim, t.dim + 1);
+    let mut m = [0.0; 12];
     for a in 0..n {
         for i in 0..d {
-            for entry in m[a * d + i].iter_mut().take(n) {
-                *entry = t.grads[a][i] * t.measure / n as f64;
-            }
+            m[a * d + i] = t.grads[a][i] * t.measure / n as f64;
         }
     }
     m

@@ -31,19 +31,12 @@ impl NodeGraph {
     /// (Lists of every cell's nodes per node, sorted with their repeats, took 0.3 s at 10⁵
     /// nodes.)
     pub fn new(n_nodes: usize, cells: &[usize], nodes_per_cell: usize) -> Self {
-        let mut cell_ptr = vec![0usize; n_nodes + 1];
-        cells.iter().for_each(|&p| cell_ptr[p + 1] += 1);
-        for p in 0..n_nodes {
-            cell_ptr[p + 1] += cell_ptr[p];
-        }
-        let mut cells_of = vec![0usize; cells.len()];
-        let mut fill = cell_ptr.clone();
-        for (e, cell) in cells.chunks_exact(nodes_per_cell).enumerate() {
-            for &p in cell {
-                cells_of[fill[p]] = e;
-                fill[p] += 1;
-            }
-        }
+        Self::from_node_cells(&NodeCells::new(n_nodes, cells, nodes_per_cell), cells, nodes_per_cell)
+    }
+
+    /// [`NodeGraph::new`] from the cells of each node, already listed.
+    pub fn from_node_cells(node_cells: &NodeCells, cells: &[usize], nodes_per_cell: usize) -> Self {
+        let n_nodes = node_cells.n_nodes();
         let mut mark = vec![usize::MAX; n_nodes];
         let mut ptr = Vec::with_capacity(n_nodes + 1);
         let mut adj = Vec::new();
@@ -52,7 +45,7 @@ impl NodeGraph {
             let start = adj.len();
             mark[p] = p;
             adj.push(p);
-            for &e in &cells_of[cell_ptr[p]..cell_ptr[p + 1]] {
+            for &e in node_cells.of(p) {
                 for &q in &cells[e * nodes_per_cell..(e + 1) * nodes_per_cell] {
                     if mark[q] != p {
                         mark[q] = p;
@@ -84,6 +77,43 @@ impl NodeGraph {
     /// Sorted neighbours of node `q`.
     pub fn neighbours(&self, q: usize) -> &[usize] {
         &self.adj[self.ptr[q]..self.ptr[q + 1]]
+    }
+}
+
+/// The cells of each node, in increasing order, from flat cell connectivity.
+#[derive(Debug, Clone)]
+pub struct NodeCells {
+    ptr: Vec<usize>,
+    cells: Vec<usize>,
+}
+
+impl NodeCells {
+    /// Lists the cells of every node (`nodes_per_cell` nodes per cell in `cells`).
+    pub fn new(n_nodes: usize, cells: &[usize], nodes_per_cell: usize) -> Self {
+        let mut ptr = vec![0usize; n_nodes + 1];
+        cells.iter().for_each(|&p| ptr[p + 1] += 1);
+        for p in 0..n_nodes {
+            ptr[p + 1] += ptr[p];
+        }
+        let mut of = vec![0usize; cells.len()];
+        let mut fill = ptr.clone();
+        for (e, cell) in cells.chunks_exact(nodes_per_cell).enumerate() {
+            for &p in cell {
+                of[fill[p]] = e;
+                fill[p] += 1;
+            }
+        }
+        NodeCells { ptr, cells: of }
+    }
+
+    /// Number of nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    /// The cells of node `p`, in increasing order.
+    pub fn of(&self, p: usize) -> &[usize] {
+        &self.cells[self.ptr[p]..self.ptr[p + 1]]
     }
 }
 
@@ -180,6 +210,11 @@ mod tests {
             expected.sort_unstable();
             expected.dedup();
             assert_eq!(g.neighbours(p), &expected[..], "node {p}");
+        }
+        let node_cells = NodeCells::new(6, &cells, 3);
+        for p in 0..6 {
+            let expected: Vec<usize> = (0..3).filter(|&e| cells[3 * e..3 * e + 3].contains(&p)).collect();
+            assert_eq!(node_cells.of(p), &expected[..], "node {p}");
         }
         let again = NodeGraph::of_nodal_matrix(&CscMatrix::from_graph(&g, 1, 1));
         assert_eq!((again.ptr, again.adj), (g.ptr, g.adj));

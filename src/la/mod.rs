@@ -8,8 +8,8 @@
 //! - [`QuasiDefiniteLdlt`]: the LDLᵀ of a symmetric quasi-definite matrix with a trailing block
 //!   read on its own;
 //! - [`Ilu0`] and [`gmres`]: the incomplete factor and the restarted Krylov method;
-//! - [`NodeGraph`] and [`level_bisection`]: the cell graph of the nodes and its two-way split
-//!   for the parallel sweeps;
+//! - [`NodeCells`], [`NodeGraph`] and [`level_bisection`]: the cells of each node, the cell
+//!   graph of the nodes and its two-way split for the parallel sweeps;
 //! - `petsc` (feature `petsc`): the thin binding to PETSc's GAMG;
 //! - `mpi` (feature `mpi`): the communicator, PETSc's graph partitioner and its distributed
 //!   matrix with GMRES (docs/distributed.md).
@@ -30,7 +30,7 @@ pub mod vector;
 
 pub use error::{FactorStage, LaError};
 pub use gmres::{gmres, gmres_from_residual, GmresParams, Preconditioner, SolveInfo};
-pub use graph::{level_bisection, NodeGraph, Part};
+pub use graph::{level_bisection, NodeCells, NodeGraph, Part};
 pub use ilu::Ilu0;
 pub use ldlt::QuasiDefiniteLdlt;
 pub use sparse::{ColumnsMut, CscMatrix, CsrMatrix};
