@@ -307,7 +307,13 @@ def test_ctrl_c_stops_a_run_after_its_step_and_raises_keyboard_interrupt(tmp_pat
     import subprocess
     import sys
 
+    # The child turns Ctrl-C into KeyboardInterrupt whatever it inherits: Python installs that
+    # handler only where SIGINT is not ignored, and a suite started in the background of a
+    # non-interactive shell (`cmd &`) ignores it; the child would then ignore the signal and
+    # finish its 100 000 steps (exit 0, no output: how this test failed in such runs).
     script = f"""
+import signal
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import thermocontact as tc
 sc = tc.Scenario(overrides={{**{COARSE!r}, "time.steps": 100000, "output.times": [1.0]}})
 print("running", flush=True)
