@@ -338,19 +338,24 @@ mod tests {
         m
     }
 
-    /// The node-column sweep sums every entry as the sweep over the cells does, to the bit, in
-    /// 2D and 3D: the cells of a node in increasing order, each cell's columns of the node.
-    #[test]
-    fn node_columns_are_the_sums_of_a_sweep_over_the_cells() {
-        let material = Material {
+    /// The material of the sweep tests, with the given heat capacity.
+    fn test_material(heat_capacity: f64) -> Material {
+        Material {
             density: 100.0,
-            heat_capacity: 1.3,
+            heat_capacity,
             viscosity: Isotropic::viscosity(100.0, 100.0),
             elasticity: Isotropic::elasticity(10_000.0, 0.3),
             expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
             conductivity: 0.1,
             reference_temperature: 0.0,
-        };
+        }
+    }
+
+    /// The node-column sweep sums every entry as the sweep over the cells does, to the bit, in
+    /// 2D and 3D: the cells of a node in increasing order, each cell's columns of the node.
+    #[test]
+    fn node_columns_are_the_sums_of_a_sweep_over_the_cells() {
+        let material = test_material(1.3);
         for mesh in [
             crate::mesh::rectangle(3.0, 1.0, 7, 3),
             crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
@@ -393,15 +398,7 @@ mod tests {
     /// The same bits on 1, 2 and 3 threads, in 2D and 3D: a run does not depend on the machine.
     #[test]
     fn matrices_do_not_depend_on_the_thread_count() {
-        let material = Material {
-            density: 100.0,
-            heat_capacity: 1.0,
-            viscosity: Isotropic::viscosity(100.0, 100.0),
-            elasticity: Isotropic::elasticity(10_000.0, 0.3),
-            expansion: Material::expansion_from(3e-4, 10_000.0, 0.3),
-            conductivity: 0.1,
-            reference_temperature: 0.0,
-        };
+        let material = test_material(1.0);
         for mesh in [
             crate::mesh::rectangle(3.0, 1.0, 7, 3),
             crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
