@@ -342,10 +342,16 @@ impl<'a> NewtonKrylov<'a> {
         let n = sys.order.len();
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
-
-        let mut w = self.tangential(&x);
-        laws.make_relative(&mut w);
-        let xi = previous.xi.clone();
+        // The step's start (all unknowns from the previous step), again for the way out.
+        let start = |x: Vec<f64>| {
+            let mut w = self.tangential(&x);
+            laws.make_relative(&mut w);
+            AllUnknowns {
+                x,
+                w,
+                xi: previous.xi.clone(),
+            }
+        };
         let mut info = StepInfo::default();
         let mut guard = sys.lock();
         let (a, ilu) = &mut *guard;
@@ -369,13 +375,15 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations: self.max_iterations,
             inner: InnerTolerance::Adaptive { floor: 1e-10 },
         };
-        let start = AllUnknowns { x, w, xi };
-        let iterate = match convexify(&mut newton, start.clone(), &params, &mut info) {
+        let iterate = match convexify(&mut newton, start(x), &params, &mut info) {
             Ok(iterate) => iterate,
-            Err(SolveError::NotConverged(failure)) => match newton.nonmonotone_newton(start, &mut info)? {
-                Some(iterate) => iterate,
-                None => return Err(SolveError::NotConverged(failure)),
-            },
+            Err(SolveError::NotConverged(failure)) => {
+                let (_, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
+                match newton.nonmonotone_newton(start(x), &mut info)? {
+                    Some(iterate) => iterate,
+                    None => return Err(SolveError::NotConverged(failure)),
+                }
+            }
             Err(other) => return Err(other),
         };
         drop(guard);
@@ -439,7 +447,6 @@ impl<'a> NewtonKrylov<'a> {
 
 /// An iterate of the Newton–Krylov loop: all unknowns (in the system's order), and w_τ, ξ on
 /// Γ_C.
-#[derive(Clone)]
 struct AllUnknowns {
     x: Vec<f64>,
     w: Vec<f64>,
