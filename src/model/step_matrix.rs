@@ -12,11 +12,19 @@
 //! The matrix depends on k only, so it is assembled once per step size. It is not symmetric
 //! (±G); it is stored in its sign-flipped form S = J A, J = diag(I, −I), which is symmetric
 //! quasi-definite.
+//!
+//! Both forms are summed from the assembled full-dof matrices a column at a time, without
+//! triplets. The iterative path's rows of P A Pᵀ ([`ordered_rows`]) take their pattern from the
+//! node graph (a row holds the unknowns of its node's neighbours) and read G's rows in place
+//! through the mirror of each node-graph entry, so that the set-up at 10⁶ unknowns writes A
+//! once, on both cores, and little besides (measurements and the rejected alternatives at
+//! [`ordered_rows`]).
 
 use super::error::ModelError as Error;
 use super::problem::Problem;
 use crate::la::{CscMatrix, CsrMatrix};
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 use super::state::State;
 
@@ -97,11 +105,26 @@ pub fn assemble_by_columns(
 
 /// Rows of P A Pᵀ (row and column i are unknown `order[i]`) with the right-hand side's data:
 /// the columns of [`assemble_by_columns`], row j negated where `order[j]` is a temperature
-/// unknown. The rows are summed in rounds of one block of 4096 (`ROWS_PER_BLOCK`) consecutive rows
-/// per thread, each block appended to A in order once the round is done; each row is summed
-/// alone in the same order as by [`assemble_by_columns`]: the same bits on any number of
-/// threads. The blocks of a round are all the memory beyond A and the columns' scratch (a copy
-/// of A's second half, appended at the end, raised the peak by half of A: 0.1 GB at 291k).
+/// unknown, the same bits on any number of threads.
+///
+/// A's pattern comes first, from the node graph: the row of an unknown holds the unknowns of
+/// its node's neighbours, so its length is a sum over the node's column of ℳ_θ
+/// ([`ColumnSource::column_len`]), and its columns, the places of those unknowns sorted, are
+/// the same for all unknowns of a node (one sort per node's velocities, copied down their
+/// consecutive rows). Then blocks of 4096 (`ROWS_PER_BLOCK`) consecutive rows are summed on
+/// all threads, each row's terms scattered into a dense row in the order of
+/// [`assemble_by_columns`] (the same sums, term by term) and gathered along the pattern,
+/// straight into A's own arrays: A's fresh pages are first written by the threads, and
+/// nothing is copied.
+///
+/// Measured on the 3D example at 972k unknowns (one step, release, interleaved with the
+/// version before; docs/performance.md, "Set-up"): the ordered A with its column sources
+/// 1.0–1.3 s instead of 2.6 s. Rejected: each row summed with a list of the places it touched,
+/// sorted, into blocks appended to A once a round of blocks was done (the version before: the
+/// sort, the copy of every block, and A's pages all faulted by one thread); G copied by rows
+/// for the temperature terms of a velocity column (0.2 GB of fresh memory at 10⁶ unknowns,
+/// where a page costs ≈ 0.85 s per GB on first touch on this machine: [`ColumnSource`]'s
+/// mirrors read G's rows in place).
 pub fn ordered_rows(problem: &Problem, k: f64, order: &[usize]) -> (CsrMatrix, StepRhs) {
     ordered_rows_in_blocks(problem, k, order, ROWS_PER_BLOCK)
 }
@@ -127,7 +150,10 @@ pub fn ordered_rows_range(
 }
 
 /// The rows of P A Pᵀ of the unknowns `unknowns` (row pointers, columns, values), summed in
-/// rounds of one block of `rows_per_block` rows per thread ([`ordered_rows`]).
+/// blocks of `rows_per_block` rows on all threads ([`ordered_rows`]). The row pointers come
+/// first, from the node graph ([`ColumnSource::column_len`]), so each block's rows are written
+/// straight into their place in A by the thread that sums them: A's fresh pages are mapped on
+/// both cores, and nothing is copied.
 fn rows_in_blocks(
     source: &ColumnSource,
     unknowns: &[usize],
@@ -135,40 +161,58 @@ fn rows_in_blocks(
 ) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
     let n = source.position.len();
     let n_w = source.problem.velocity.n_free;
-    let threads = rayon::current_num_threads().max(1);
-    let mut scratches: Vec<ColumnScratch> = (0..threads).map(|_| ColumnScratch::new(n)).collect();
     let mut ptr = Vec::with_capacity(unknowns.len() + 1);
     ptr.push(0);
-    let (mut col, mut val) = (Vec::new(), Vec::new());
-    for round in unknowns.chunks(rows_per_block * threads) {
-        let blocks: Vec<(Vec<usize>, Vec<u32>, Vec<f64>)> = (round.par_chunks(rows_per_block))
-            .zip(scratches.par_iter_mut())
-            .map(|(rows, scratch)| {
-                let mut column = Vec::new();
-                let (mut len, mut col, mut val) = (Vec::with_capacity(rows.len()), Vec::new(), Vec::new());
-                for &c in rows {
-                    source.column(c, scratch, &mut column);
-                    let sign = if c < n_w { 1.0 } else { -1.0 };
-                    col.extend(column.iter().map(|&(j, _)| index32(j)));
-                    val.extend(column.iter().map(|&(_, v)| sign * v));
-                    len.push(column.len());
-                }
-                (len, col, val)
-            })
-            .collect();
-        for (len, c, v) in blocks {
-            for l in len {
-                ptr.push(ptr[ptr.len() - 1] + l);
-            }
-            col.extend_from_slice(&c);
-            val.extend_from_slice(&v);
-        }
+    for &c in unknowns {
+        ptr.push(ptr[ptr.len() - 1] + source.column_len(c));
     }
+    // Fresh zeros: each page is first written, by the thread that sums its rows.
+    let nnz = ptr[unknowns.len()];
+    let (mut col, mut val) = (vec![0u32; nnz], vec![0.0; nnz]);
+    let mut blocks = Vec::with_capacity(unknowns.len().div_ceil(rows_per_block.max(1)));
+    let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
+    for (b, rows) in unknowns.chunks(rows_per_block).enumerate() {
+        let row_ptr = &ptr[b * rows_per_block..=b * rows_per_block + rows.len()];
+        let len = row_ptr[rows.len()] - row_ptr[0];
+        let (block_col, rest) = std::mem::take(&mut col_rest).split_at_mut(len);
+        col_rest = rest;
+        let (block_val, rest) = std::mem::take(&mut val_rest).split_at_mut(len);
+        val_rest = rest;
+        blocks.push((rows, row_ptr, block_col, block_val));
+    }
+    // One dense row per thread of the pool (a block's rows are summed by one thread), zero
+    // between rows.
+    let sums: Vec<Mutex<Vec<f64>>> = (0..rayon::current_num_threads().max(1))
+        .map(|_| Mutex::new(vec![0.0; n]))
+        .collect();
+    blocks.into_par_iter().for_each(|(rows, row_ptr, col, val)| {
+        let thread = rayon::current_thread_index().unwrap_or(0) % sums.len();
+        let mut sum = sums[thread].lock().expect("a dense row per thread");
+        let mut last: Option<(usize, std::ops::Range<usize>)> = None;
+        for (i, &c) in rows.iter().enumerate() {
+            let range = row_ptr[i] - row_ptr[0]..row_ptr[i + 1] - row_ptr[0];
+            // The pattern: the node's, shared by its unknowns (its velocities are consecutive
+            // rows, so most rows copy the row above).
+            let node = source.node_of_unknown(c);
+            match &last {
+                Some((previous, above)) if *previous == node => col.copy_within(above.clone(), range.start),
+                _ => source.node_pattern(node, &mut col[range.clone()]),
+            }
+            source.scatter(c, |p, term| sum[p] += term);
+            let sign = if c < n_w { 1.0 } else { -1.0 };
+            for (slot, &j) in val[range.clone()].iter_mut().zip(&col[range.clone()]) {
+                *slot = sign * sum[j as usize];
+                sum[j as usize] = 0.0;
+            }
+            last = Some((node, range));
+        }
+        debug_assert!(sum.iter().all(|&v| v == 0.0), "a term outside the node pattern");
+    });
     (ptr, col, val)
 }
 
-/// Rows of one thread's block in [`ordered_rows`]: ≈ 3 MB of A in 3D, small against A and
-/// large against a round's scheduling.
+/// Rows of one block in [`ordered_rows`]: ≈ 3 MB of A in 3D, small against A and large
+/// against the scheduling of a block.
 const ROWS_PER_BLOCK: usize = 4096;
 
 /// What a column of the step matrix is summed from: the θ_D lift (done once), Pᵀ by unknowns,
@@ -185,9 +229,17 @@ struct ColumnSource<'p> {
     full_entries: Vec<(usize, f64)>,
     /// The node of each temperature unknown.
     node_of: Vec<usize>,
-    /// G by rows (full velocity dofs): (node, value) of row f at `g_ptr[f]..g_ptr[f + 1]`.
-    g_ptr: Vec<usize>,
-    g_entries: Vec<(usize, f64)>,
+    /// The node of each velocity unknown.
+    velocity_node: Vec<usize>,
+    /// The unknowns of each node (its velocities and its temperature if free).
+    unknowns_at: Vec<usize>,
+    /// G by rows without a copy of G: entry t of the node graph (the pattern of ℳ_θ), node q
+    /// in the column of node p, has its mirror, node p in the column of q, at `mirror[t]`.
+    /// G's column q holds node p's d rows at place k·d (k the place of p among q's
+    /// neighbours, [`crate::la::CscMatrix::from_graph`]), so row (p, j) of G is read from the
+    /// columns of p's neighbours. (G copied by rows took 16 bytes per entry, 0.2 GB of fresh
+    /// memory at 10⁶ unknowns.)
+    mirror: Vec<u32>,
     position: Vec<usize>,
 }
 
@@ -262,7 +314,21 @@ impl<'p> ColumnSource<'p> {
                 node_of[*c] = q;
             }
         }
-        let (g_ptr, g_entries) = grouped_by_row(coupling.n_rows, || coupling.triplets());
+        let mut velocity_node = vec![0; n_w];
+        let unknowns_at = (0..problem.mesh.n_nodes())
+            .map(|p| {
+                let velocities = vel.node_unknowns(p);
+                velocity_node[velocities.clone()].fill(p);
+                velocities.len() + usize::from(temp.free[p].is_some())
+            })
+            .collect();
+        let mirror = mirrors(heat_mass);
+        let d = vel.dim;
+        assert!(
+            coupling.n_rows == d * heat_mass.n_rows
+                && (coupling.col_ptr.iter().zip(heat_mass.col_ptr.iter())).all(|(&g, &m)| g == d * m),
+            "G and ℳ_θ on the pattern of one node graph"
+        );
         let mut position = vec![0; n];
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
         ColumnSource {
@@ -273,31 +339,105 @@ impl<'p> ColumnSource<'p> {
             full_ptr,
             full_entries,
             node_of,
-            g_ptr,
-            g_entries,
+            velocity_node,
+            unknowns_at,
+            mirror,
             position,
         }
     }
 
+    /// The node of unknown c.
+    fn node_of_unknown(&self, c: usize) -> usize {
+        let n_w = self.problem.velocity.n_free;
+        if c < n_w {
+            self.velocity_node[c]
+        } else {
+            self.node_of[c - n_w]
+        }
+    }
+
+    /// The neighbours of a node in the node graph (itself included), sorted: the pattern of
+    /// ℳ_θ, whose node pairs are those of every assembled matrix.
+    fn neighbours(&self, node: usize) -> &[usize] {
+        let graph = &self.problem.matrices.heat_mass;
+        &graph.row_idx[graph.col_ptr[node]..graph.col_ptr[node + 1]]
+    }
+
+    /// The number of entries of column c of S: the unknowns of the nodes next to c's node.
+    /// Every entry of a node pair's blocks is in the pattern of the assembled matrices
+    /// ([`crate::la::CscMatrix::from_graph`]), and every unknown of a node has a full dof of it
+    /// in its support: the column reaches each of them, and no other unknown.
+    fn column_len(&self, c: usize) -> usize {
+        (self.neighbours(self.node_of_unknown(c)).iter())
+            .map(|&q| self.unknowns_at[q])
+            .sum()
+    }
+
+    /// The pattern of the columns of a node's unknowns: the places in the ordering of the
+    /// unknowns of its neighbours, sorted, into `pattern` (of [`Self::column_len`] entries).
+    fn node_pattern(&self, node: usize, pattern: &mut [u32]) {
+        let (vel, temp) = (&self.problem.velocity, &self.problem.temperature);
+        let n_w = vel.n_free;
+        let unknowns =
+            (self.neighbours(node).iter()).flat_map(|&q| vel.node_unknowns(q).chain(temp.free[q].map(|r| n_w + r)));
+        let mut filled = 0;
+        for (slot, r) in pattern.iter_mut().zip(unknowns) {
+            *slot = index32(self.position[r]);
+            filled += 1;
+        }
+        assert_eq!(filled, pattern.len(), "the pattern of node {node}");
+        pattern.sort_unstable();
+    }
+
     /// Column c of S, rows by their place in the ordering, sorted, into `column`.
     fn column(&self, c: usize, scratch: &mut ColumnScratch, column: &mut Vec<(usize, f64)>) {
+        scratch.touched.clear();
+        self.scatter(c, |p, value| scratch.add(p, value));
+        let ColumnScratch { sum, seen, touched } = scratch;
+        touched.sort_unstable();
+        column.clear();
+        for &p in touched.iter() {
+            column.push((p, sum[p]));
+            sum[p] = 0.0;
+            seen[p] = false;
+        }
+    }
+
+    /// Row f = (p, j) of G (f a full velocity dof), as (node q, G_fq) for q ascending over the
+    /// neighbours of p: entry (p, j) of G's column q lies at place k·d + j of that column, k
+    /// the place of p among q's neighbours, which the mirror of (q in p's column) gives.
+    fn coupling_row(&self, f: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let mats = &self.problem.matrices;
+        let (coupling, graph) = (&mats.coupling, &mats.heat_mass);
+        let d = self.problem.velocity.dim;
+        let (p, j) = (f / d, f % d);
+        (graph.col_ptr[p]..graph.col_ptr[p + 1]).map(move |t| {
+            let q = graph.row_idx[t];
+            let place = self.mirror[t] as usize - graph.col_ptr[q];
+            (q, coupling.values[coupling.col_ptr[q] + place * d + j])
+        })
+    }
+
+    /// The terms of column c of S, each as `add(row's place in the ordering, term)`: every
+    /// entry's terms in the order the sum takes them (the same bits wherever they are summed).
+    #[inline]
+    fn scatter(&self, c: usize, mut add: impl FnMut(usize, f64)) {
         let (vel, temp) = (&self.problem.velocity, &self.problem.temperature);
         let mats = &self.problem.matrices;
         let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
         let (k, n_w, position) = (self.k, vel.n_free, &self.position);
-        scratch.touched.clear();
         if c < n_w {
             // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
             for &(f, b) in &self.full_entries[self.full_ptr[c]..self.full_ptr[c + 1]] {
                 for idx in mass.col_ptr[f]..mass.col_ptr[f + 1] {
                     let value = mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
                     for &(r, a) in vel.row(mass.row_idx[idx]) {
-                        scratch.add(position[r], a * b * value);
+                        add(position[r], a * b * value);
                     }
                 }
-                for &(q, g) in &self.g_entries[self.g_ptr[f]..self.g_ptr[f + 1]] {
+                for (q, g) in self.coupling_row(f) {
                     if let Some(cq) = temp.free[q] {
-                        scratch.add(position[n_w + cq], b * g);
+                        add(position[n_w + cq], b * g);
                     }
                 }
             }
@@ -307,23 +447,15 @@ impl<'p> ColumnSource<'p> {
             let range = coupling.col_ptr[q]..coupling.col_ptr[q + 1];
             for (row, g) in coupling.row_idx[range.clone()].iter().zip(&coupling.values[range]) {
                 for &(r, a) in vel.row(*row) {
-                    scratch.add(position[r], a * g);
+                    add(position[r], a * g);
                 }
             }
             for idx in heat_mass.col_ptr[q]..heat_mass.col_ptr[q + 1] {
                 if let Some(r) = temp.free[heat_mass.row_idx[idx]] {
                     let value = heat_mass.values[idx] / k + mats.conduction.values[idx];
-                    scratch.add(position[n_w + r], -value);
+                    add(position[n_w + r], -value);
                 }
             }
-        }
-        let ColumnScratch { sum, seen, touched } = scratch;
-        touched.sort_unstable();
-        column.clear();
-        for &p in touched.iter() {
-            column.push((p, sum[p]));
-            sum[p] = 0.0;
-            seen[p] = false;
         }
     }
 
@@ -507,6 +639,22 @@ fn grouped_by_row<I: Iterator<Item = (usize, usize, f64)>>(
     (ptr, grouped)
 }
 
+/// The mirror of each entry of a matrix with a symmetric pattern, sorted rows in each column:
+/// entry t, row q in column p, has its mirror (row p in column q) at `mirror[t]`. The columns
+/// are swept in order, so each column's mirrors are met in the order of its rows: no search.
+fn mirrors(matrix: &CscMatrix) -> Vec<u32> {
+    let mut mirror = vec![0u32; matrix.row_idx.len()];
+    let mut next: Vec<usize> = matrix.col_ptr[..matrix.n_cols].to_vec();
+    for q in 0..matrix.n_cols {
+        for t in matrix.col_ptr[q]..matrix.col_ptr[q + 1] {
+            let p = matrix.row_idx[t];
+            mirror[next[p]] = index32(t);
+            next[p] += 1;
+        }
+    }
+    mirror
+}
+
 /// A matrix index as the 32-bit index of the CSR layout.
 ///
 /// # Panics
@@ -568,33 +716,55 @@ mod tests {
     }
 
     /// The rows of [`ordered_rows`] are the columns of [`assemble_by_columns`] (sign-flipped in
-    /// the temperature rows), to the bit, on 1, 2 and 3 threads: the blocks and rounds change
+    /// the temperature rows), to the bit, on 1, 2 and 3 threads, in a scattered order (each row
+    /// its own node's pattern) and in the unknowns' own order (a node's velocities consecutive
+    /// rows that share one pattern): the blocks, the node patterns and the dense rows change
     /// nothing.
     #[test]
     fn ordered_rows_are_the_columns_on_any_number_of_threads() {
         let problem = crate::model::samples::paper_3d([4, 2, 2], 64).unwrap();
         let (k, n_w) = (problem.time_step(), problem.velocity.n_free);
         let n = n_w + problem.temperature.n_free;
-        let order: Vec<usize> = (0..n).map(|i| (i * 7919) % n).collect();
         assert!(!n.is_multiple_of(7919), "a permutation");
-        let mut columns = Vec::new();
-        assemble_by_columns(&problem, k, &order, |column| columns.push(column.to_vec()));
-        assert_eq!(columns.len(), n);
-        for threads in [1, 2, 3] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            // Blocks of 7 rows: many rounds, and a last block cut short.
-            let (a, _) = pool.install(|| ordered_rows_in_blocks(&problem, k, &order, 7));
-            for (j, column) in columns.iter().enumerate() {
-                let sign = if order[j] < n_w { 1.0 } else { -1.0 };
-                let (cols, vals) = a.row(j);
-                assert!(cols.iter().map(|&c| c as usize).eq(column.iter().map(|&(r, _)| r)));
-                let bits = |v: f64| v.to_bits();
-                assert!(vals
-                    .iter()
-                    .map(|&v| bits(v))
-                    .eq(column.iter().map(|&(_, v)| bits(sign * v))));
+        for order in [(0..n).map(|i| (i * 7919) % n).collect::<Vec<usize>>(), (0..n).collect()] {
+            let mut columns = Vec::new();
+            assemble_by_columns(&problem, k, &order, |column| columns.push(column.to_vec()));
+            assert_eq!(columns.len(), n);
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                // Blocks of 7 rows: many blocks, a node's rows across two, a last one cut short.
+                let (a, _) = pool.install(|| ordered_rows_in_blocks(&problem, k, &order, 7));
+                for (j, column) in columns.iter().enumerate() {
+                    let sign = if order[j] < n_w { 1.0 } else { -1.0 };
+                    let (cols, vals) = a.row(j);
+                    assert!(cols.iter().map(|&c| c as usize).eq(column.iter().map(|&(r, _)| r)));
+                    let bits = |v: f64| v.to_bits();
+                    assert!(vals
+                        .iter()
+                        .map(|&v| bits(v))
+                        .eq(column.iter().map(|&(_, v)| bits(sign * v))));
+                }
             }
         }
+    }
+
+    /// G's rows read in place through the node graph's mirrors are G's rows: every entry of
+    /// its pattern, in the order of its columns.
+    #[test]
+    fn coupling_rows_read_through_the_mirrors_are_the_rows_of_g() {
+        let problem = crate::model::samples::paper_3d([4, 2, 2], 64).unwrap();
+        let order: Vec<usize> = (0..problem.velocity.n_free + problem.temperature.n_free).collect();
+        let source = ColumnSource::new(&problem, problem.time_step(), &order);
+        let coupling = &problem.matrices.coupling;
+        let mut by_rows = vec![Vec::new(); coupling.n_rows];
+        for (f, q, g) in coupling.triplets() {
+            by_rows[f].push((q, g.to_bits()));
+        }
+        for (f, row) in by_rows.iter().enumerate() {
+            let read: Vec<(usize, u64)> = source.coupling_row(f).map(|(q, g)| (q, g.to_bits())).collect();
+            assert_eq!(&read, row, "row {f}");
+        }
+        assert!(by_rows.iter().flatten().any(|&(_, g)| f64::from_bits(g) != 0.0));
     }
 
     /// The ordered form is P A Pᵀ: entry (i, j) is A's entry (order[i], order[j]).
