@@ -109,7 +109,7 @@ pub fn assemble_by_columns(
 ///
 /// A's pattern comes first, from the node graph: the row of an unknown holds the unknowns of
 /// its node's neighbours, so its length is a sum over the node's column of ℳ_θ
-/// ([`ColumnSource::column_len`]), and its columns, the places of those unknowns sorted, are
+/// (`ColumnSource::column_len`), and its columns, the places of those unknowns sorted, are
 /// the same for all unknowns of a node (one sort per node's velocities, copied down their
 /// consecutive rows). Then blocks of 4096 (`ROWS_PER_BLOCK`) consecutive rows are summed on
 /// all threads, each row's terms scattered into a dense row in the order of
@@ -117,14 +117,17 @@ pub fn assemble_by_columns(
 /// straight into A's own arrays: A's fresh pages are first written by the threads, and
 /// nothing is copied.
 ///
-/// Measured on the 3D example at 972k unknowns (one step, release, interleaved with the
-/// version before; docs/performance.md, "Set-up"): the ordered A with its column sources
-/// 1.0–1.3 s instead of 2.6 s. Rejected: each row summed with a list of the places it touched,
-/// sorted, into blocks appended to A once a round of blocks was done (the version before: the
-/// sort, the copy of every block, and A's pages all faulted by one thread); G copied by rows
-/// for the temperature terms of a velocity column (0.2 GB of fresh memory at 10⁶ unknowns,
-/// where a page costs ≈ 0.85 s per GB on first touch on this machine: [`ColumnSource`]'s
-/// mirrors read G's rows in place).
+/// Measured on the 3D example at 972k unknowns (one step, release, three pairs interleaved
+/// with the version before on the shared 2-core machine, load 1.8–2.5; docs/performance.md,
+/// "Pattern first"): the ordered A with its ILU(0) 1.9–2.9 s instead of 5.2–9.8 s, the peak
+/// memory 3.02 GB instead of 3.13 GB; the ordered A itself 0.9–1.2 s, of which 0.6–0.8 s of
+/// CPU: the rest is A's 0.67 GB of fresh pages. Rejected: each row summed with a list of the
+/// places it touched, sorted, into blocks appended to A once a round of blocks was done (the
+/// version before: a copy of every block, and A's pages all faulted by one thread; the sort
+/// per row itself cost little, within the noise of the node patterns); G copied by rows for
+/// the temperature terms of a velocity column (0.2 GB of fresh memory at 10⁶ unknowns, where
+/// a page costs ≈ 0.85 s per GB on first touch on this machine: `ColumnSource`'s mirrors read
+/// G's rows in place).
 pub fn ordered_rows(problem: &Problem, k: f64, order: &[usize]) -> (CsrMatrix, StepRhs) {
     ordered_rows_in_blocks(problem, k, order, ROWS_PER_BLOCK)
 }
