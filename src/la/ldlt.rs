@@ -373,6 +373,94 @@ impl QuasiDefiniteLdlt {
         }
     }
 
+    /// Study: the values of L rounded to f32.
+    pub fn study_single_values(&self) -> Vec<f32> {
+        self.values.iter().map(|&v| v as f32).collect()
+    }
+
+    /// Study: a solve with L's values `values` (f32 or f64; D, the vectors and the sums f64).
+    pub fn study_solve_with<T: Copy + Into<f64>>(&self, values: &[T], b: &mut [f64], permuted: &mut [f64], scratch: &mut [f64]) {
+        self.permute(b, permuted);
+        self.study_forward_with(values, permuted, scratch, 0);
+        self.diagonal(permuted, 0);
+        self.study_backward_with(values, permuted, scratch, 0);
+        self.unpermute(permuted, b);
+    }
+
+    /// Study: [`Self::forward`] with L's values `values`.
+    pub fn study_forward_with<T: Copy + Into<f64>>(&self, values: &[T], y: &mut [f64], scratch: &mut [f64], from: usize) {
+        let first = self.nodes.partition_point(|node| node.end <= from);
+        for node in &self.nodes[first..] {
+            let (w, h, p) = (node.width(), node.height(), node.n_pattern);
+            let skip = from.saturating_sub(node.begin);
+            let values = &values[node.val..node.val + h * w];
+            let rows = &self.rows[node.pattern..node.pattern + p];
+            let top = &mut y[node.begin..node.end];
+            for j in skip..w {
+                let (done, rest) = top.split_at_mut(j + 1);
+                let yj = done[j];
+                for (r, &l) in rest.iter_mut().zip(&values[j * h + j + 1..j * h + w]) {
+                    *r -= l.into() * yj;
+                }
+            }
+            let top = &y[node.begin..node.end];
+            let update = &mut scratch[..p];
+            update.fill(0.0);
+            let mut j = skip;
+            while j + 4 <= w {
+                let c = |q: usize| &values[(j + q) * h + w..(j + q) * h + w + p];
+                let (c0, c1, c2, c3) = (c(0), c(1), c(2), c(3));
+                let (y0, y1, y2, y3) = (top[j], top[j + 1], top[j + 2], top[j + 3]);
+                let update = &mut update[..p];
+                for i in 0..p {
+                    update[i] += c0[i].into() * y0 + c1[i].into() * y1 + c2[i].into() * y2 + c3[i].into() * y3;
+                }
+                j += 4;
+            }
+            for j in j..w {
+                let yj = top[j];
+                for (u, &l) in update.iter_mut().zip(&values[j * h + w..(j + 1) * h]) {
+                    *u += l.into() * yj;
+                }
+            }
+            for (&row, u) in rows.iter().zip(update.iter()) {
+                y[row] -= u;
+            }
+        }
+    }
+
+    /// Study: [`Self::backward`] with L's values `values`.
+    pub fn study_backward_with<T: Copy + Into<f64>>(&self, values: &[T], x: &mut [f64], scratch: &mut [f64], to: usize) {
+        let first = self.nodes.partition_point(|node| node.end <= to);
+        for node in self.nodes[first..].iter().rev() {
+            let (w, h, p) = (node.width(), node.height(), node.n_pattern);
+            let skip = to.saturating_sub(node.begin);
+            let values = &values[node.val..node.val + h * w];
+            let rows = &self.rows[node.pattern..node.pattern + p];
+            let below = &mut scratch[..p];
+            for (b, &row) in below.iter_mut().zip(rows) {
+                *b = x[row];
+            }
+            let top = &mut x[node.begin..node.end];
+            let mut j = skip;
+            while j + 4 <= w {
+                let c = |q: usize| &values[(j + q) * h + w..(j + q + 1) * h];
+                let sums = study_dot4([c(0), c(1), c(2), c(3)], below);
+                for (q, sum) in sums.iter().enumerate() {
+                    top[j + q] -= sum;
+                }
+                j += 4;
+            }
+            for j in j..w {
+                top[j] -= study_dot(&values[j * h + w..(j + 1) * h], below);
+            }
+            for j in (skip..w).rev() {
+                let sum = study_dot(&values[j * h + j + 1..j * h + w], &top[j + 1..]);
+                top[j] -= sum;
+            }
+        }
+    }
+
     /// Columns of (L₂₂ D₂ L₂₂ᵀ)⁻¹, the trailing block of P S⁻¹ Pᵀ, for the given trailing
     /// positions: column-major, m rows (row r is position n − m + r), one column per position.
     pub fn trailing_inverse(&self, positions: &[usize]) -> Vec<f64> {
@@ -475,6 +563,50 @@ fn dot4(c: [&[f64]; 4], v: &[f64]) -> [f64; 4] {
         }
     }
     sums
+}
+
+fn study_dot4<T: Copy + Into<f64>>(c: [&[T]; 4], v: &[f64]) -> [f64; 4] {
+    let n = v.len();
+    let c = c.map(|c| &c[..n]);
+    let mut lanes = [[0.0f64; 4]; 2];
+    let pairs = n / 2;
+    for k in 0..pairs {
+        for (l, lane) in lanes.iter_mut().enumerate() {
+            let i = 2 * k + l;
+            let vi = v[i];
+            for q in 0..4 {
+                lane[q] += c[q][i].into() * vi;
+            }
+        }
+    }
+    let mut sums = [0.0; 4];
+    for q in 0..4 {
+        sums[q] = lanes[0][q] + lanes[1][q];
+        if n % 2 == 1 {
+            sums[q] += c[q][n - 1].into() * v[n - 1];
+        }
+    }
+    sums
+}
+
+fn study_dot<T: Copy + Into<f64>>(a: &[T], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut lanes = [0.0; 8];
+    let mut chunks_a = a.chunks_exact(8);
+    let mut chunks_b = b.chunks_exact(8);
+    for (ca, cb) in (&mut chunks_a).zip(&mut chunks_b) {
+        for k in 0..8 {
+            lanes[k] += ca[k].into() * cb[k];
+        }
+    }
+    let tail: f64 = chunks_a
+        .remainder()
+        .iter()
+        .zip(chunks_b.remainder())
+        .map(|(&x, y)| x.into() * y)
+        .sum();
+    lanes.iter().sum::<f64>() + tail
 }
 
 /// The order (position → unknown): the unknowns not in `last` by faer's AMD on the graph of S
