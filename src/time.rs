@@ -136,36 +136,21 @@ impl<'a> Levels<'a> {
     fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
         let clock = Instant::now();
         let energy = crate::model::step_energy(self.problem, previous, state);
-        self.add_energy_seconds(clock);
-        Ok(energy?)
-    }
-
-    fn add_energy_seconds(&self, since: Instant) {
         self.energy_seconds
-            .set(self.energy_seconds.get() + since.elapsed().as_secs_f64());
+            .set(self.energy_seconds.get() + clock.elapsed().as_secs_f64());
+        Ok(energy?)
     }
 
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next
     /// level where it does not converge; `n` is the time level being computed (for errors).
-    /// `energies`: a step that converges at this level has its energies computed here (else
-    /// they are left to the caller, [`march_from`]); a cut-back step's substeps always do.
-    fn advance(
-        &self,
-        previous: &State,
-        t: f64,
-        depth: usize,
-        n: usize,
-        energies: bool,
-    ) -> Result<(State, StepInfo), TimeError> {
+    fn advance(&self, previous: &State, t: f64, depth: usize, n: usize) -> Result<(State, StepInfo), TimeError> {
         // A step cut short from outside (`step::abort`) stops before each (sub)step.
         crate::step::abort::check()?;
         match self.level(depth)?.step(previous, t) {
             Ok((state, mut info)) => {
                 info.substeps = 1;
                 info.cutback_depth = depth;
-                if energies {
-                    info.energy = self.energy(previous, &state)?;
-                }
+                info.energy = self.energy(previous, &state)?;
                 Ok((state, info))
             }
             Err(SolveError::Other(error)) => Err(error.into()),
@@ -179,8 +164,8 @@ impl<'a> Levels<'a> {
                     });
                 }
                 let middle = previous.t + 0.5 * (t - previous.t);
-                let (half, mut info) = self.advance(previous, middle, depth + 1, n, true)?;
-                let (end, rest) = self.advance(&half, t, depth + 1, n, true)?;
+                let (half, mut info) = self.advance(previous, middle, depth + 1, n)?;
+                let (end, rest) = self.advance(&half, t, depth + 1, n)?;
                 info.absorb(&rest);
                 Ok((end, info))
             }
@@ -215,44 +200,11 @@ pub fn march_from<E: From<TimeError>>(
     start: State,
     mut observer: impl FnMut(&State, &StepInfo) -> Result<(), E>,
 ) -> Result<State, Box<Stopped<E>>> {
-    let k = problem.time_step();
     let mut state = start;
-    // The step that reached `state`, not yet observed: its energies are computed beside the
-    // next step's solve.
-    let mut pending: Option<Pending> = None;
-    let beside = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread pool of one");
+    let k = problem.time_step();
     for n in state.n + 1..=problem.time.steps {
         let t = n as f64 * k;
-        crate::step::heartbeat::step_started(n, t);
-        let clock = Instant::now();
-        let (advanced, energy) = std::thread::scope(|scope| {
-            let energy = pending
-                .as_ref()
-                .map(|p| scope.spawn(|| beside.install(|| crate::model::step_energy(problem, &p.previous, &state))));
-            let advanced = levels.advance(&state, t, 0, n, false);
-            let waited = Instant::now();
-            let energy = energy.map(|handle| handle.join().expect("the energies' thread does not panic"));
-            levels.add_energy_seconds(waited);
-            (advanced, energy)
-        });
-        let _ = clock;
-        if let Some(Pending { previous, mut info }) = pending.take() {
-            match energy.expect("spawned with the pending step") {
-                Ok(energy) => info.energy = energy,
-                Err(error) => {
-                    return Err(Box::new(Stopped {
-                        error: TimeError::Step(error.into()).into(),
-                        last: previous,
-                    }))
-                }
-            }
-            // The step is complete even where its observer fails (an output error, a stop
-            // request): it is the last state reached.
-            if let Err(error) = observer(&state, &info) {
-                return Err(Box::new(Stopped { error, last: state }));
-            }
-        }
-        let (mut next, info) = match advanced {
+        let (mut next, info) = match levels.advance(&state, t, 0, n) {
             Ok(step) => step,
             Err(error) => {
                 return Err(Box::new(Stopped {
@@ -264,41 +216,14 @@ pub fn march_from<E: From<TimeError>>(
         // Substeps advanced the level once each; t_n is n k exactly.
         next.n = n;
         next.t = t;
-        if info.substeps > 1 {
-            // A cut-back step's energies are its substeps', summed in `advance`.
-            if let Err(error) = observer(&next, &info) {
-                return Err(Box::new(Stopped { error, last: next }));
-            }
-            state = next;
-        } else {
-            pending = Some(Pending {
-                previous: std::mem::replace(&mut state, next),
-                info,
-            });
+        // The step is complete even where its observer fails (an output error, a stop
+        // request): it is the last state reached.
+        if let Err(error) = observer(&next, &info) {
+            return Err(Box::new(Stopped { error, last: next }));
         }
-    }
-    if let Some(Pending { previous, mut info }) = pending {
-        match levels.energy(&previous, &state) {
-            Ok(energy) => info.energy = energy,
-            Err(error) => {
-                return Err(Box::new(Stopped {
-                    error: TimeError::Step(error).into(),
-                    last: previous,
-                }))
-            }
-        }
-        if let Err(error) = observer(&state, &info) {
-            return Err(Box::new(Stopped { error, last: state }));
-        }
+        state = next;
     }
     Ok(state)
-}
-
-/// A step reached and not yet observed ([`march_from`]): the state it started from and its
-/// solver figures, its energies still to come.
-struct Pending {
-    previous: State,
-    info: StepInfo,
 }
 
 /// Sets the solver up and runs all N steps ([`march`]).

@@ -242,6 +242,7 @@ fn march(
     let _abort = o.stop.0.map(|flag| crate::step::abort::abort_on(flag.now()));
     // A step that runs long reports its outer iterations (`step::heartbeat`).
     let _heartbeat = o.progress.heartbeat();
+    crate::step::heartbeat::step_started(first.n + 1, problem.time.time(first.n + 1));
     let marched = time::march_from(problem, levels, first, |state, info| {
         observer(problem, state, info);
         let step = o.recorder.step(state, info);
@@ -254,6 +255,7 @@ fn march(
         o.progress.line(&step, output, o.recorder.tally.cutbacks.len());
         o.stop.step(state)?;
         o.recorder.next_step();
+        crate::step::heartbeat::step_started(state.n + 1, problem.time.time(state.n + 1));
         Ok(())
     });
     o.progress.end(marched.is_ok());
