@@ -77,7 +77,6 @@ pub struct StepSystem {
     /// Work counters: solves (right-hand sides) and seconds spent in them and in `rhs`.
     stats: Mutex<SystemStats>,
     factor: QuasiDefiniteLdlt,
-    single: Option<Vec<f32>>,
     n_w: usize,
 }
 
@@ -97,11 +96,9 @@ impl StepSystem {
         let StepMatrix { matrix, rhs: operator } = operator;
         let n_w = operator.n_w();
         let factor = QuasiDefiniteLdlt::with_trailing(&matrix, &contact_unknowns(problem, n_w))?;
-        let single = std::env::var_os("TC_F32").map(|_| factor.study_single_values());
         Ok(StepSystem {
             matrix,
             operator,
-            single,
             factor,
             n_w,
             stats: Mutex::new(SystemStats::default()),
@@ -245,10 +242,7 @@ impl StepSystem {
         let mut work = vec![0.0; n];
         let mut scratch = vec![0.0; factor.scratch_len()];
         factor.permute(&x, &mut forward);
-        match &self.single {
-            Some(v) => factor.study_forward_with(v, &mut forward, &mut scratch, 0),
-            None => factor.forward(&mut forward, &mut scratch, 0),
-        }
+        factor.forward(&mut forward, &mut scratch, 0);
         factor.diagonal(&mut forward, 0);
         work[t0..].copy_from_slice(&forward[t0..]);
         factor.backward(&mut work, &mut scratch, t0);
@@ -311,10 +305,7 @@ impl StepSystem {
         for (w, f) in work[t0..].iter_mut().zip(&forward[t0..]) {
             *w += f;
         }
-        match &self.single {
-            Some(v) => factor.study_backward_with(v, work, scratch, 0),
-            None => factor.backward(work, scratch, 0),
-        }
+        factor.backward(work, scratch, 0);
         factor.unpermute(work, x);
         self.count(|s| {
             s.sweeps += 1;
