@@ -11,6 +11,15 @@
 //! needs them and kept for the rest of the run ([`Levels`]). `cutback = false` keeps the
 //! paper's uniform k.
 //!
+//! **The energies stay on the loop's thread, after their step.** Tried: step n's energies
+//! computed on a second thread while step n+1 solves, with the observers of step n one step
+//! late. The output was byte-identical and the energies were hidden (0.21–0.47 s of the 2D
+//! reference run). But on this project's 2-core machine, shared with other work, the solves and
+//! the rest of the step slowed by as much: the time loop changed by a median of +0.05 s
+//! (−0.35 to +0.36 s) over 20 interleaved pairs. It also delays every observer by a step (a
+//! graceful stop discards the step already solved), so it is not done
+//! (docs/linear-algebra-study.md, issue 28 item 3).
+//!
 //! Depends on: [`crate::step`] (the step solvers and their selection), [`crate::model`].
 
 use std::cell::{Cell, OnceCell};

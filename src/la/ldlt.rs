@@ -46,14 +46,18 @@
 //!
 //! **Rejected: L in single precision with iterative refinement.** A copy of L in f32 (D, the
 //! vectors and the sums in f64) swept by the same loops, refined against S in f64
-//! (x ← x + S̃⁻¹(J b − S x)). Measured on the 2D reference step matrix (49 344 unknowns,
-//! 6.2 M entries in L; the two right-hand sides of step 1 and of S x for a rough x; release
-//! build, a loaded machine, both variants in one process): a split solve 62.8–63.8 ms in f64,
-//! 41.8–43.6 ms with L in f32 (0.67×: the sweeps are not purely bandwidth-bound), a mat-vec
-//! with S 4.7–5.4 ms. The f32 solve alone is 2–6e-8 off the f64 solution (relative, ∞-norm),
-//! so every solve needs one refinement (after it 3–4e-15, as the f64 solve; a second gains
-//! nothing): two f32 solves and a mat-vec are 1.41× the f64 solve. On a machine where the
-//! sweeps were purely bandwidth-bound (f32 at 0.5×) it would still be 1.1×.
+//! (x ← x + S̃⁻¹(J b − S x)). Measured on the 2D reference step matrix (49 344 unknowns, 6.2 M
+//! entries in L, 49.8 MB in f64 and 24.9 MB in f32; a loaded 2-core machine; three runs of the
+//! study at commit 7a55b2b; an earlier measurement gave 0.67× and 1.41×, alike). The f32 solve
+//! takes 0.66–0.83× the f64 one (10.5–14.1 ms against 12.8–17.2 ms): the sweeps are not purely
+//! bandwidth-bound. A mat-vec with S takes 1.9–2.8 ms. The f32 solve alone is 3–5e-8 off
+//! the f64 solution (relative, ∞-norm). Started from the previous step's solution it is still
+//! 1e-9–3e-8 off, because the velocities change by 7–100 % from step to step. So every solve
+//! needs one refinement to reach the f64 solve's 1e-15, and two f32 solves plus two mat-vecs
+//! cost 1.5–1.95× the f64 solve. Without refinement the run's solves take 20–30 % less, but its
+//! outputs move by up to 6e-7 and its heat balance closes to 1.3e-5 instead of 6e-13: not the
+//! same solution. The condensation would keep an f64 trailing block in any case
+//! (docs/linear-algebra-study.md, issue 28 item 3).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
