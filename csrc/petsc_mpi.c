@@ -135,12 +135,17 @@ struct tc_dist {
   Vec        b, x;
   KSP        ksp;
   PetscCount n_coo;
+  /* The scatter of x to every rank and its whole copy, made at the first tc_dist_all_gather. */
+  VecScatter to_all;
+  Vec        whole;
 };
 typedef struct tc_dist tc_dist;
 
 void tc_dist_destroy(tc_dist *dist)
 {
   if (!dist) return;
+  VecScatterDestroy(&dist->to_all);
+  VecDestroy(&dist->whole);
   KSPDestroy(&dist->ksp);
   MatDestroy(&dist->A);
   VecDestroy(&dist->b);
@@ -188,7 +193,9 @@ int tc_dist_create(int n_owned, int n_global, int bs, long long n_coo, const int
   return 0;
 }
 
-/* The values of the COO pairs, in their order (repeated pairs summed); collective. */
+/* The values of the COO pairs, in their order (repeated pairs summed); collective. The Krylov
+ * solver, if set up, stays: its preconditioner is set up again on the new values at the next
+ * solve (PCSetUp sees the matrix's state change; the pattern is the same). */
 int tc_dist_set_values(tc_dist *dist, const double *values)
 {
   return (int)MatSetValuesCOO(dist->A, values, INSERT_VALUES);
@@ -264,6 +271,58 @@ int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residua
   *iterations = (int)its;
   *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
   *reason = (int)why;
+  PetscFunctionReturn(0);
+}
+
+/* Solves A x = b with this rank's owned entries of b (`rhs`) and of the initial guess (`owned`,
+ * overwritten by the solution): no off-process entries, so no assembly. Iterations, the final
+ * relative residual ||b - Ax|| / ||b|| and the converged reason as tc_dist_solve. */
+int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned, int *iterations, double *residual,
+                       int *reason)
+{
+  PetscInt           its, n;
+  PetscReal          rnorm, bnorm;
+  KSPConvergedReason why;
+  PetscScalar       *v;
+  const PetscScalar *x;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(dist->b, &n));
+  PetscCall(VecGetArray(dist->b, &v));
+  memcpy(v, rhs, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArray(dist->b, &v));
+  PetscCall(VecGetArray(dist->x, &v));
+  memcpy(v, owned, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArray(dist->x, &v));
+  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
+  PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
+  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
+  PetscCall(KSPGetIterationNumber(dist->ksp, &its));
+  PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
+  PetscCall(KSPGetConvergedReason(dist->ksp, &why));
+  PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
+  PetscCall(VecGetArrayRead(dist->x, &x));
+  memcpy(owned, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(dist->x, &x));
+  *iterations = (int)its;
+  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
+  *reason = (int)why;
+  PetscFunctionReturn(0);
+}
+
+/* The whole solution on every rank (n_global values into `all`), by PETSc's scatter to all,
+ * made once and kept; collective. */
+int tc_dist_all_gather(tc_dist *dist, double *all)
+{
+  const PetscScalar *x;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  if (!dist->to_all) PetscCall(VecScatterCreateToAll(dist->x, &dist->to_all, &dist->whole));
+  PetscCall(VecScatterBegin(dist->to_all, dist->x, dist->whole, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(dist->to_all, dist->x, dist->whole, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(dist->whole, &n));
+  PetscCall(VecGetArrayRead(dist->whole, &x));
+  memcpy(all, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(dist->whole, &x));
   PetscFunctionReturn(0);
 }
 

@@ -244,16 +244,82 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let error = e.downcast_ref::<thermocontact::Error>();
-            match error.and_then(thermocontact::scenario::keys_behind) {
-                Some(keys) => eprintln!("error: {}. {keys}", chain(&e)),
-                None => eprintln!("error: {}", chain(&e)),
-            }
-            match error {
+            let message = match error.and_then(thermocontact::scenario::keys_behind) {
+                Some(keys) => format!("error: {}. {keys}", chain(&e)),
+                None => format!("error: {}", chain(&e)),
+            };
+            let code = match error {
                 // 130 / 143, as the shell reports a process ended by SIGINT / SIGTERM.
-                Some(thermocontact::Error::Interrupted { cause, .. }) => ExitCode::from(cause.exit_code()),
-                _ => ExitCode::FAILURE,
-            }
+                Some(thermocontact::Error::Interrupted { cause, .. }) => cause.exit_code(),
+                _ => 1,
+            };
+            ranks::end_with(&message, code)
         }
+    }
+}
+
+/// The ranks of a distributed run (`mpirun -n P thermocontact run`, cargo feature `mpi`). MPI
+/// starts only where a launcher started more than one rank (Open MPI's `OMPI_COMM_WORLD_SIZE`,
+/// or `PMI_SIZE`): one process behaves as without the feature.
+mod ranks {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    static SIZE: AtomicUsize = AtomicUsize::new(1);
+    static RANK: AtomicUsize = AtomicUsize::new(0);
+
+    /// The ranks the launcher started (1 without a launcher).
+    fn launched() -> usize {
+        (["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"].iter())
+            .filter_map(|v| std::env::var(v).ok()?.parse::<usize>().ok())
+            .max()
+            .unwrap_or(1)
+    }
+
+    /// (rank, size) of this process, MPI started where there is more than one rank.
+    pub fn start() -> anyhow::Result<(usize, usize)> {
+        if launched() <= 1 {
+            return Ok((0, 1));
+        }
+        #[cfg(feature = "mpi")]
+        {
+            let comm = thermocontact::la::mpi::Communicator::world()?;
+            SIZE.store(comm.size(), Ordering::SeqCst);
+            RANK.store(comm.rank(), Ordering::SeqCst);
+            Ok((comm.rank(), comm.size()))
+        }
+        #[cfg(not(feature = "mpi"))]
+        anyhow::bail!(
+            "started as {} ranks, but this build has no MPI: build thermocontact with `--features mpi` \
+             (docs/distributed.md), or run one process",
+            launched()
+        )
+    }
+
+    /// Ends the process after an error: one process prints it and exits with `code`. In a
+    /// distributed run the ranks meet the same error from the same numbers, so rank 0 prints it
+    /// and ends every rank (`MPI_Abort`); another rank waits for that, and ends every rank with
+    /// its own message where rank 0 did not (an error of its own).
+    pub fn end_with(message: &str, code: u8) -> std::process::ExitCode {
+        let (rank, size) = (RANK.load(Ordering::SeqCst), SIZE.load(Ordering::SeqCst));
+        if size <= 1 {
+            eprintln!("{message}");
+            return std::process::ExitCode::from(code);
+        }
+        #[cfg(feature = "mpi")]
+        if let Ok(comm) = thermocontact::la::mpi::Communicator::world() {
+            if rank == 0 {
+                eprintln!("{message}");
+                comm.abort_all(
+                    "the run failed on rank 0 (the error above); every rank ends",
+                    i32::from(code),
+                );
+            }
+            std::thread::sleep(std::time::Duration::from_secs(5));
+            comm.abort_all(message, i32::from(code));
+        }
+        let _ = rank;
+        eprintln!("{message}");
+        std::process::ExitCode::from(code)
     }
 }
 
@@ -404,6 +470,35 @@ fn refuse_another_scenario(
     )
 }
 
+/// The solver settings of a run over `size` ranks: the iterative path's Newton–Krylov solver
+/// with its Krylov solves on PETSc over the ranks. The paper's solver and the direct path
+/// (the LDLᵀ factor and the dense condensation on Γ_C) run on one process: a distributed run
+/// with them is refused, naming the key.
+fn distributed_params(
+    mut params: thermocontact::step::SolverParams,
+    size: usize,
+) -> anyhow::Result<thermocontact::step::SolverParams> {
+    use thermocontact::step::{LinearKind, SolverKind};
+    if size <= 1 {
+        return Ok(params);
+    }
+    if params.kind == SolverKind::Paper {
+        anyhow::bail!(
+            "solver.kind = \"paper\" runs on one process (its Uzawa iterations on Γ_C): a run over {size} ranks \
+             needs solver.kind = \"fast\" (Newton–Krylov on the iterative path), or run it without mpirun"
+        );
+    }
+    if params.linear == LinearKind::Direct {
+        anyhow::bail!(
+            "solver.linear = \"direct\" runs on one process (an LDLᵀ factor and the dense condensation on Γ_C): \
+             a run over {size} ranks needs solver.linear = \"iterative\" (or \"auto\"), or run it without mpirun"
+        );
+    }
+    params.linear = LinearKind::Iterative;
+    params.krylov.distributed = true;
+    Ok(params)
+}
+
 fn execute(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Scenario => {
@@ -453,6 +548,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             restart,
             quiet,
         } => {
+            let (rank, size) = ranks::start()?;
+            let root = rank == 0;
             // Without --out, the default folder takes a new run in place of a completed one
             // (running the same command twice is the first thing a newcomer does).
             let replace_completed = out.is_none() && restart.is_none();
@@ -468,9 +565,14 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     (scenario, dir, Some(checkpoint))
                 }
             };
-            print_setup(&scenario);
+            let params = distributed_params(scenario.solver_params(), size)?;
+            if root {
+                print_setup(&scenario);
+            }
             if let Some(restart) = &restart {
                 refuse_another_scenario(&scenario, restart, &out)?;
+            }
+            if let Some(restart) = restart.as_ref().filter(|_| root) {
                 println!(
                     "continuing from step {} (t = {}) of {}",
                     restart.checkpoint.state.n,
@@ -494,27 +596,40 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 Some(_) => scenario.build_continued()?,
                 None => scenario.build()?,
             };
-            if replace_completed && !overwrite && thermocontact::output::folder::holds_completed_run(&out) {
+            if root && replace_completed && !overwrite && thermocontact::output::folder::holds_completed_run(&out) {
                 println!(
                     "replacing the completed run in {}/ (give --out to keep results apart)",
                     out.display()
                 );
             }
+            if size > 1 && root {
+                println!(
+                    "distributed over {size} ranks (PETSc + MPI): every rank holds the problem, each owns the rows of \
+                     its part of the mesh; rank 0 writes {}/",
+                    out.display()
+                );
+            }
+            // In a distributed run rank 0 owns the folder and the terminal; the other ranks
+            // compute the same steps and write nothing.
             let options = RunOptions {
-                out_dir: Some(out.clone()),
-                progress: !quiet,
-                log: true,
+                out_dir: root.then(|| out.clone()),
+                progress: !quiet && root,
+                log: root,
                 overwrite,
                 replace_completed,
                 stop: Some(stop_on_signals()?),
                 restart,
                 ..RunOptions::default()
             };
-            let summary = driver::run(&problem, &scenario.solver_params(), &scenario.output_plan(), &options)
-                .inspect_err(|error| match error {
+            let summary =
+                driver::run(&problem, &params, &scenario.output_plan(), &options).inspect_err(|error| match error {
                     thermocontact::Error::Folder(_) | thermocontact::Error::Checkpoint(_) => {}
+                    _ if !root => {}
                     _ => eprintln!("{}", stopped_run_hint(&out)),
                 })?;
+            if !root {
+                return Ok(());
+            }
             print_summary(&summary);
             println!(
                 "{}; results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",

@@ -87,6 +87,15 @@ extern "C" {
         reason: *mut c_int,
     ) -> c_int;
     fn tc_dist_gather(dist: *mut RawDist, all: *mut c_double) -> c_int;
+    fn tc_dist_solve_from(
+        dist: *mut RawDist,
+        rhs: *const c_double,
+        owned: *mut c_double,
+        iterations: *mut c_int,
+        residual: *mut c_double,
+        reason: *mut c_int,
+    ) -> c_int;
+    fn tc_dist_all_gather(dist: *mut RawDist, all: *mut c_double) -> c_int;
     fn tc_dist_destroy(dist: *mut RawDist);
     fn tc_ghost_create(n_owned: c_int, n_ghost: c_int, ghosts: *const c_int, out: *mut *mut RawVec) -> c_int;
     fn tc_ghost_set_and_update(v: *mut RawVec, owned: *const c_double) -> c_int;
@@ -408,8 +417,9 @@ impl DistributedMatrix {
     }
 
     /// The values of this rank's COO pairs, in the order of [`DistributedMatrix::new`]
-    /// (repeated pairs summed, over the ranks too), replacing the previous ones; the Krylov
-    /// solver is set up again on them by the next solve.
+    /// (repeated pairs summed, over the ranks too), replacing the previous ones; the next solve
+    /// sets the preconditioner up again on them (the pattern is the same, so only its numbers:
+    /// PETSc's `PCSetUp` on the matrix's changed state).
     pub fn set_values(&mut self, values: &[f64]) -> Result<(), Error> {
         assert_eq!(values.len(), self.n_coo, "one value per COO pair");
         let _petsc = petsc_lock();
@@ -417,7 +427,6 @@ impl DistributedMatrix {
         check("MatSetValuesCOO", unsafe {
             tc_dist_set_values(self.handle.as_ptr(), values.as_ptr())
         })?;
-        self.krylov = None;
         Ok(())
     }
 
@@ -442,22 +451,7 @@ impl DistributedMatrix {
             .collect::<Result<Vec<_>, _>>()?;
         let _petsc = petsc_lock();
         let dist = self.handle.as_ptr();
-        if self.krylov != Some(*params) {
-            // SAFETY: a live handle.
-            check("KSPSetUp", unsafe {
-                tc_dist_krylov(
-                    dist,
-                    match params.preconditioner {
-                        DistributedPreconditioner::BlockJacobiIlu0 => 0,
-                        DistributedPreconditioner::Gamg => 1,
-                    },
-                    params.rtol,
-                    params.max_iterations.min(c_int::MAX as usize) as c_int,
-                    params.restart.clamp(1, c_int::MAX as usize) as c_int,
-                )
-            })?;
-            self.krylov = Some(*params);
-        }
+        self.krylov_for(params)?;
         // SAFETY: a live handle; index.len() entries each.
         check("VecAssembly", unsafe {
             tc_dist_set_rhs(dist, index.len() as c_longlong, index32.as_ptr(), value.as_ptr())
@@ -482,6 +476,82 @@ impl DistributedMatrix {
             });
         }
         Ok((owned, info))
+    }
+
+    /// The Krylov solver of `params`, set up where the last solve had other parameters (the
+    /// caller holds the PETSc lock).
+    fn krylov_for(&mut self, params: &DistributedKrylov) -> Result<(), Error> {
+        if self.krylov != Some(*params) {
+            // SAFETY: a live handle.
+            check("KSPSetUp", unsafe {
+                tc_dist_krylov(
+                    self.handle.as_ptr(),
+                    match params.preconditioner {
+                        DistributedPreconditioner::BlockJacobiIlu0 => 0,
+                        DistributedPreconditioner::Gamg => 1,
+                    },
+                    params.rtol,
+                    params.max_iterations.min(c_int::MAX as usize) as c_int,
+                    params.restart.clamp(1, c_int::MAX as usize) as c_int,
+                )
+            })?;
+            self.krylov = Some(*params);
+        }
+        Ok(())
+    }
+
+    /// Solves A x = b by GMRES from the initial guess x: `rhs` and `x` are this rank's owned
+    /// entries of b and of x (PETSc's layout), x overwritten by the solution. Converged where
+    /// ‖b − Ax‖ ≤ rtol ‖b‖, as the serial GMRES.
+    pub fn solve_from(
+        &mut self,
+        params: &DistributedKrylov,
+        rhs: &[f64],
+        x: &mut [f64],
+    ) -> Result<DistributedSolveInfo, Error> {
+        assert!(
+            rhs.len() == self.owned.len() && x.len() == self.owned.len(),
+            "the owned entries"
+        );
+        let _petsc = petsc_lock();
+        self.krylov_for(params)?;
+        let (mut iterations, mut residual, mut reason) = (0, 0.0, 0);
+        // SAFETY: a live handle; `rhs` and `x` have this rank's row count.
+        check("KSPSolve", unsafe {
+            tc_dist_solve_from(
+                self.handle.as_ptr(),
+                rhs.as_ptr(),
+                x.as_mut_ptr(),
+                &mut iterations,
+                &mut residual,
+                &mut reason,
+            )
+        })?;
+        let info = DistributedSolveInfo {
+            iterations: iterations as usize,
+            residual,
+        };
+        if reason <= 0 {
+            return Err(Error::KrylovNotConverged {
+                method: "GMRES (PETSc, distributed)",
+                iterations: info.iterations,
+                rtol: params.rtol,
+                residual,
+                history: Vec::new(),
+            });
+        }
+        Ok(info)
+    }
+
+    /// The last solution, whole, on every rank (PETSc's scatter to all, made once); collective.
+    pub fn all_gather(&mut self) -> Result<Vec<f64>, Error> {
+        let mut all = vec![0.0; self.n_global];
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle; n_global values.
+        check("VecScatterCreateToAll", unsafe {
+            tc_dist_all_gather(self.handle.as_ptr(), all.as_mut_ptr())
+        })?;
+        Ok(all)
     }
 
     /// The last solution, whole, on rank 0 (`None` on the others); collective.

@@ -59,13 +59,45 @@ pub struct KrylovSystem {
     /// The contact rows' values of A, rows `first_contact..n` one after the other
     /// ([`CsrMatrix::values_from`]).
     pub(super) base: Vec<f64>,
-    /// Ã and its ILU(0), changed in the contact rows by each linearization.
-    work: Mutex<(CsrMatrix, Ilu0)>,
+    /// Ã and its Krylov solver, changed in the contact rows by each linearization.
+    work: Mutex<(CsrMatrix, KrylovSolver)>,
     /// The AMG coarse correction of the velocities, where the preconditioner has one (`amg`, or
     /// `auto` resolved to it).
     amg: Option<VelocityAmg>,
     pub(super) params: KrylovParams,
     stats: Mutex<SystemStats>,
+}
+
+/// What solves Ã x = b̃ by GMRES: this process, with the ILU(0) of Ã (and the AMG's coarse
+/// correction of the velocities where the system has one), or PETSc over the MPI ranks of a
+/// distributed run ([`KrylovParams::distributed`], [`super::ranks`]).
+pub(super) enum KrylovSolver {
+    /// This process's GMRES with the ILU(0) of Ã.
+    Process(Ilu0),
+    /// PETSc's GMRES over the ranks.
+    #[cfg(feature = "mpi")]
+    Ranks(super::ranks::RankKrylov),
+}
+
+impl KrylovSolver {
+    /// The preconditioner brought up to date with Ã, whose rows from `first_changed` on have
+    /// changed (the ILU(0) refactored from there; the ranks' rows handed to PETSc again).
+    pub(super) fn update(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
+        match self {
+            KrylovSolver::Process(ilu) => ilu.refactor_from(a, first_changed),
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(ranks) => ranks.set_matrix(a),
+        }
+    }
+
+    /// Stored entries of Ã and of its factor (this process's ILU(0), or this rank's rows).
+    fn nnz(&self) -> usize {
+        match self {
+            KrylovSolver::Process(ilu) => ilu.nnz(),
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(ranks) => ranks.nnz(),
+        }
+    }
 }
 
 /// The unknowns in the order of the ILU(0) sweeps, where the two domains end, and the first
@@ -127,6 +159,67 @@ fn ilu_needs_amg(
     }
 }
 
+/// The Krylov solver over the ranks of a distributed run, its preconditioner from
+/// `params.preconditioner`: block Jacobi + ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for
+/// `auto` the serial rule's probe with block Jacobi + ILU(0) (the first step's system from zero
+/// to 10⁻⁸, GAMG where it needs more than [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
+#[cfg(feature = "mpi")]
+fn ranks_solver(
+    problem: &Problem,
+    rhs: &StepRhs,
+    order: &[usize],
+    a: &CsrMatrix,
+    params: &KrylovParams,
+) -> Result<KrylovSolver, StepError> {
+    use crate::la::mpi::{DistributedKrylov, DistributedPreconditioner};
+    let krylov = |preconditioner, rtol, max_iterations| DistributedKrylov {
+        preconditioner,
+        rtol,
+        max_iterations,
+        restart: params.restart,
+    };
+    let gamg = params.preconditioner == PreconditionerKind::Amg;
+    let first = if gamg {
+        DistributedPreconditioner::Gamg
+    } else {
+        DistributedPreconditioner::BlockJacobiIlu0
+    };
+    let mut ranks =
+        super::ranks::RankKrylov::new(problem, a, order, krylov(first, params.rtol, params.max_iterations))?;
+    if params.preconditioner == PreconditionerKind::Auto {
+        let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step(), None)?;
+        let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
+        let mut x = vec![0.0; b.len()];
+        ranks.set_preconditioner(first);
+        let probe = krylov(first, 1e-8, PreconditionerKind::AUTO_AMG_ABOVE);
+        let needs_amg = match ranks.probe(&probe, &b, &mut x) {
+            Ok(_) => false,
+            Err(LaError::KrylovNotConverged { .. }) => true,
+            Err(other) => return Err(other.into()),
+        };
+        if needs_amg {
+            ranks.set_preconditioner(DistributedPreconditioner::Gamg);
+        }
+    }
+    Ok(KrylovSolver::Ranks(ranks))
+}
+
+/// Without the `mpi` feature there are no ranks: a distributed system is refused.
+#[cfg(not(feature = "mpi"))]
+fn ranks_solver(
+    _problem: &Problem,
+    _rhs: &StepRhs,
+    _order: &[usize],
+    _a: &CsrMatrix,
+    _params: &KrylovParams,
+) -> Result<KrylovSolver, StepError> {
+    Err(LaError::Petsc {
+        operation: "MPI_Init",
+        detail: "this build has no MPI: build thermocontact with `--features mpi` for a distributed run".into(),
+    }
+    .into())
+}
+
 impl KrylovSystem {
     /// Assembles the step matrix of step size k in the order with the Γ_C tangential
     /// velocities last, as A's rows (no symmetric form, no triplets: [`ordered_rows`]),
@@ -166,16 +259,21 @@ impl KrylovSystem {
                 }
             })
             .collect();
-        let ilu = Ilu0::with_domains(&a, parts)?;
-        let with_amg = match params.preconditioner {
-            PreconditionerKind::Ilu => false,
-            PreconditionerKind::Amg => true,
-            PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
-        };
-        let amg = if with_amg {
-            Some(VelocityAmg::new(problem, &a, &order)?)
+        let (solver, amg) = if params.distributed {
+            (ranks_solver(problem, &rhs, &order, &a, &params)?, None)
         } else {
-            None
+            let ilu = Ilu0::with_domains(&a, parts)?;
+            let with_amg = match params.preconditioner {
+                PreconditionerKind::Ilu => false,
+                PreconditionerKind::Amg => true,
+                PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
+            };
+            let amg = if with_amg {
+                Some(VelocityAmg::new(problem, &a, &order)?)
+            } else {
+                None
+            };
+            (KrylovSolver::Process(ilu), amg)
         };
         Ok(KrylovSystem {
             rhs,
@@ -183,7 +281,7 @@ impl KrylovSystem {
             first_contact,
             nodes,
             base,
-            work: Mutex::new((a, ilu)),
+            work: Mutex::new((a, solver)),
             amg,
             params,
             stats: Mutex::new(SystemStats::default()),
@@ -195,14 +293,22 @@ impl KrylovSystem {
         self.rhs.time_step()
     }
 
-    /// Stored entries of A and of its ILU(0) factor (the same pattern).
+    /// Stored entries of A and of its ILU(0) factor (the same pattern); in a distributed run,
+    /// this rank's.
     pub fn factor_nnz(&self) -> usize {
         self.lock().1.nnz()
     }
 
     /// The preconditioner set up: [`PreconditionerKind::Ilu`] or [`PreconditionerKind::Amg`]
-    /// (`auto` resolved).
+    /// (`auto` resolved; in a distributed run, block Jacobi + ILU(0) or PETSc's GAMG).
     pub fn preconditioner(&self) -> PreconditionerKind {
+        #[cfg(feature = "mpi")]
+        if let KrylovSolver::Ranks(ranks) = &self.lock().1 {
+            return match ranks.preconditioner() {
+                crate::la::mpi::DistributedPreconditioner::Gamg => PreconditionerKind::Amg,
+                crate::la::mpi::DistributedPreconditioner::BlockJacobiIlu0 => PreconditionerKind::Ilu,
+            };
+        }
         if self.amg.is_some() {
             PreconditionerKind::Amg
         } else {
@@ -219,14 +325,22 @@ impl KrylovSystem {
     /// [`gmres_from_residual`] for `residual`).
     pub(super) fn gmres(
         &self,
-        (a, ilu): (&CsrMatrix, &Ilu0),
+        (a, solver): (&CsrMatrix, &mut KrylovSolver),
         rhs: &[f64],
         x: &mut [f64],
         residual: &mut Vec<f64>,
     ) -> Result<SolveInfo, LaError> {
-        match &self.amg {
-            None => gmres_from_residual(a, ilu, rhs, x, residual, &self.params.gmres()),
-            Some(amg) => gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params.gmres()),
+        match (solver, &self.amg) {
+            (KrylovSolver::Process(ilu), None) => gmres_from_residual(a, &*ilu, rhs, x, residual, &self.params.gmres()),
+            (KrylovSolver::Process(ilu), Some(amg)) => {
+                gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params.gmres())
+            }
+            // PETSc keeps its own residual: the caller's is left empty (not carried over).
+            #[cfg(feature = "mpi")]
+            (KrylovSolver::Ranks(ranks), _) => {
+                residual.clear();
+                ranks.solve(rhs, x)
+            }
         }
     }
 
@@ -261,12 +375,12 @@ impl KrylovSystem {
     /// solve of the constant matrix with this system's preconditioner, for studies and tests.
     pub fn solve(&self, b: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
         let mut guard = self.lock();
-        let (a, ilu) = &mut *guard;
+        let (a, solver) = &mut *guard;
         a.values_from_mut(self.first_contact).copy_from_slice(&self.base);
-        ilu.refactor_from(a, self.first_contact)?;
+        solver.update(a, self.first_contact)?;
         let b_ordered: Vec<f64> = self.order.iter().map(|&o| b[o]).collect();
         let mut x_ordered: Vec<f64> = self.order.iter().map(|&o| x[o]).collect();
-        let info = self.gmres((a, ilu), &b_ordered, &mut x_ordered, &mut Vec::new())?;
+        let info = self.gmres((a, solver), &b_ordered, &mut x_ordered, &mut Vec::new())?;
         self.order.iter().zip(&x_ordered).for_each(|(&o, v)| x[o] = *v);
         Ok(info)
     }
@@ -276,7 +390,7 @@ impl KrylovSystem {
         *self.stats.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, (CsrMatrix, Ilu0)> {
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, (CsrMatrix, KrylovSolver)> {
         self.work.lock().unwrap_or_else(|e| e.into_inner())
     }
 
@@ -290,13 +404,13 @@ impl KrylovSystem {
 /// cap is a step failure of the linear solve, with its residual history.
 pub(super) fn krylov_solve(
     sys: &KrylovSystem,
-    (a, ilu): (&CsrMatrix, &Ilu0),
+    (a, solver): (&CsrMatrix, &mut KrylovSolver),
     rhs: &[f64],
     x: &mut [f64],
     residual: &mut Vec<f64>,
     clock: Instant,
 ) -> Result<usize, SolveError> {
-    let solved = sys.gmres((a, ilu), rhs, x, residual);
+    let solved = sys.gmres((a, solver), rhs, x, residual);
     sys.count(|s| {
         s.solves += 1;
         s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);

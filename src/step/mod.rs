@@ -29,6 +29,8 @@ mod newton;
 mod newton_krylov;
 mod paper;
 mod paper_krylov;
+#[cfg(feature = "mpi")]
+mod ranks;
 mod select;
 
 use serde::{Deserialize, Serialize};
@@ -73,6 +75,11 @@ pub struct KrylovParams {
     pub restart: usize,
     /// ILU(0) alone, or with the AMG coarse correction of the velocities ([`VelocityAmg`]).
     pub preconditioner: PreconditionerKind,
+    /// Run the solves on PETSc over the MPI ranks of the process's world (cargo feature `mpi`,
+    /// `mpirun -n P`): every rank holds the problem and the iterates, each owns the rows of Ã
+    /// of its part of the mesh; the preconditioner is then block Jacobi + ILU(0) (`ilu`) or
+    /// PETSc's GAMG (`amg`), `auto` by the same probe (docs/distributed.md). Default: false.
+    pub distributed: bool,
 }
 
 /// The preconditioner of the iterative path's GMRES.
@@ -120,6 +127,7 @@ impl Default for KrylovParams {
             max_iterations: 500,
             restart: 30,
             preconditioner: PreconditionerKind::Ilu,
+            distributed: false,
         }
     }
 }

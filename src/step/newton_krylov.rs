@@ -110,11 +110,11 @@
 use std::time::Instant;
 
 use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
-use super::iterative::{krylov_solve, tangential, KrylovSystem};
+use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::newton::{node_law_residual, slip_linearization};
 use super::{Criterion, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
-use crate::la::{CsrMatrix, Ilu0};
+use crate::la::CsrMatrix;
 use crate::model::{ContactLaws, Problem, State};
 
 /// How one node is linearized.
@@ -148,11 +148,11 @@ enum Fall<'f> {
     Capped(&'f [f64]),
 }
 
-/// One step's linear algebra: Ã (A with its contact rows linearized), its ILU(0) and b̃.
+/// One step's linear algebra: Ã (A with its contact rows linearized), its Krylov solver and b̃.
 struct Linearization<'s> {
     system: &'s KrylovSystem,
     a: &'s mut CsrMatrix,
-    ilu: &'s mut Ilu0,
+    solver: &'s mut KrylovSolver,
     /// b without the contact terms, in the system's order.
     b: &'s [f64],
     /// The laws of the step (the frictional heat).
@@ -259,7 +259,7 @@ impl Linearization<'_> {
             }
         }
         let clock = Instant::now();
-        self.ilu.refactor_from(a, sys.first_contact)?;
+        self.solver.update(a, sys.first_contact)?;
         // The previous solve left r = b̃ − Ã x for this x; only the Γ_C rows and the contact
         // nodes' temperature rows of Ã and b̃ changed since, so only they are recomputed (a
         // product with Ã saved per iteration).
@@ -270,7 +270,7 @@ impl Linearization<'_> {
             }
         }
         info.newton_iterations += 1;
-        info.krylov_iterations += krylov_solve(sys, (a, self.ilu), rhs, x, &mut self.residual, clock)?;
+        info.krylov_iterations += krylov_solve(sys, (a, self.solver), rhs, x, &mut self.residual, clock)?;
 
         // The new iterate: w from x (relative to the foundation), ξ from the linearization
         // (slip) or the rows (stick).
@@ -354,13 +354,13 @@ impl<'a> NewtonKrylov<'a> {
         };
         let mut info = StepInfo::default();
         let mut guard = sys.lock();
-        let (a, ilu) = &mut *guard;
+        let (a, solver) = &mut *guard;
         let mut newton = SemismoothNewton {
             solver: self,
             linearization: Linearization {
                 system: sys,
                 a,
-                ilu,
+                solver,
                 b: &b,
                 laws,
                 td,

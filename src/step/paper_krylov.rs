@@ -15,12 +15,12 @@
 
 use std::time::Instant;
 
-use super::iterative::{krylov_solve, tangential, KrylovSystem};
+use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
 use super::StepError as Error;
 use super::{SolveError, StepInfo};
 use crate::la::vector::largest_eigenvalue_within;
-use crate::la::{CsrMatrix, Ilu0};
+use crate::la::CsrMatrix;
 use crate::model::Problem;
 use crate::model::{ContactLaws, State};
 
@@ -62,12 +62,12 @@ impl<'a> PaperKrylov<'a> {
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
         let mut guard = sys.lock();
-        let (a, ilu) = &mut *guard;
+        let (a, solver) = &mut *guard;
         let mut loaded = KrylovStep {
             problem,
             system: sys,
             a,
-            ilu,
+            solver,
             previous,
             t,
             rhs: vec![0.0; b.len()],
@@ -97,7 +97,7 @@ struct KrylovStep<'s> {
     problem: &'s Problem,
     system: &'s KrylovSystem,
     a: &'s CsrMatrix,
-    ilu: &'s Ilu0,
+    solver: &'s mut KrylovSolver,
     previous: &'s State,
     t: f64,
     /// b without the contact terms, in the system's order.
@@ -147,8 +147,14 @@ impl KrylovStep<'_> {
         change.iter_mut().zip(&self.rhs).for_each(|(c, new)| *c += new);
         self.y.fill(0.0);
         self.residual.clone_from(change);
-        self.krylov_iterations +=
-            krylov_solve(sys, (self.a, self.ilu), change, &mut self.y, &mut self.residual, clock)?;
+        self.krylov_iterations += krylov_solve(
+            sys,
+            (self.a, self.solver),
+            change,
+            &mut self.y,
+            &mut self.residual,
+            clock,
+        )?;
         self.x.iter_mut().zip(&self.y).for_each(|(x, y)| *x += y);
         Ok(())
     }
@@ -186,8 +192,8 @@ pub(super) fn spectral_bound_within(
     max_products: usize,
 ) -> Result<f64, Error> {
     let td = problem.dim() - 1;
-    let guard = sys.lock();
-    let (a, ilu) = &*guard;
+    let mut guard = sys.lock();
+    let (a, solver) = &mut *guard;
     let n = sys.order.len();
     let (mut rhs, mut x, mut residual) = (vec![0.0; n], vec![0.0; n], Vec::new());
     largest_eigenvalue_within(problem.contact.len() * td, tolerance, max_products, |v, y| {
@@ -198,7 +204,7 @@ pub(super) fn spectral_bound_within(
             }
         }
         residual.clear();
-        sys.gmres((a, ilu), &rhs, &mut x, &mut residual)?;
+        sys.gmres((a, &mut *solver), &rhs, &mut x, &mut residual)?;
         y.copy_from_slice(&tangential(&sys.nodes, td, &x, y.len()));
         Ok(())
     })

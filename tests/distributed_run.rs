@@ -1,0 +1,249 @@
+//! `mpirun -n P thermocontact run` (cargo feature `mpi`; docs/distributed.md) against one
+//! process: the same stick/slip state at every step and at every contact node of every output,
+//! the same cutbacks, and fields within the bound the solvers' tolerances give. Also: a
+//! distributed run with the direct path is refused naming `solver.linear`, and a step that
+//! does not converge ends every rank with a non-zero status, the message once and a folder
+//! that says `failed`.
+//!
+//! **The bound.** Each rank's GMRES stops at ‖b − Ax‖ ≤ 10⁻¹⁰ ‖b‖ as the serial one does, but
+//! with another preconditioner (block Jacobi + ILU(0) over the ranks' parts), so the Newton
+//! iterates differ by the solves' errors, and the convexification loop, which stops once its
+//! changes fall below ε_conv = 10⁻⁶, may stop one iterate apart. Fields are therefore compared
+//! to 10⁻⁶ of their largest magnitude (measured on the 3D example, 2 ranks: 8·10⁻⁸ for ξ,
+//! 10⁻⁹ for w_τ and θ).
+
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn skipped_without_the_mpi_feature() {
+    eprintln!("tests/distributed_run.rs needs `--features mpi` (and Open MPI's mpirun)");
+}
+
+#[cfg(feature = "mpi")]
+mod distributed {
+    use std::path::{Path, PathBuf};
+    use std::process::{Command, Output};
+
+    const CLI: &str = env!("CARGO_BIN_EXE_thermocontact");
+
+    /// Relative bound on the fields (the module header).
+    const FIELD_BOUND: f64 = 1e-6;
+
+    fn scenarios() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios")
+    }
+
+    /// `thermocontact run` on `ranks` ranks (one: no mpirun) into a fresh `out`.
+    fn run(ranks: usize, out: &Path, args: &[String]) -> Output {
+        let _ = std::fs::remove_dir_all(out);
+        let mut command = if ranks == 1 {
+            Command::new(CLI)
+        } else {
+            let mut c = Command::new("timeout");
+            c.args(["600", "mpirun", "--allow-run-as-root", "--oversubscribe", "-n"])
+                .arg(ranks.to_string())
+                .arg(CLI);
+            c
+        };
+        command.arg("run").args(args).arg("--out").arg(out).arg("--quiet");
+        command
+            .output()
+            .expect("thermocontact (and, for several ranks, mpirun: Debian's openmpi-bin) runs")
+    }
+
+    fn text(output: &Output) -> String {
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        )
+    }
+
+    fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+        let body = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut lines = body.lines();
+        let header = lines.next().expect("a header").split(',').map(String::from).collect();
+        let rows = lines.map(|l| l.split(',').map(String::from).collect()).collect();
+        (header, rows)
+    }
+
+    /// The runs in `one` and `other` agree: steps.csv's slip, stick, substeps and cutback depth
+    /// at every step, every contact CSV's slip flag at every node, its fields within
+    /// [`FIELD_BOUND`] of their largest magnitude.
+    fn assert_runs_agree(one: &Path, other: &Path) {
+        let (header, a) = read_csv(&one.join("steps.csv"));
+        let (_, b) = read_csv(&other.join("steps.csv"));
+        assert_eq!(a.len(), b.len(), "the same steps");
+        for name in ["n", "slip", "stick", "substeps", "cutback_depth"] {
+            let c = header.iter().position(|h| h == name).expect(name);
+            for (ra, rb) in a.iter().zip(&b) {
+                assert_eq!(ra[c], rb[c], "steps.csv {name} at step {}", ra[0]);
+            }
+        }
+        let mut contact: Vec<PathBuf> = std::fs::read_dir(one)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("contact_"))
+            .collect();
+        contact.sort();
+        assert!(!contact.is_empty(), "contact CSVs in {}", one.display());
+        for path in contact {
+            let name = path.file_name().unwrap();
+            let (header, a) = read_csv(&path);
+            let (_, b) = read_csv(&other.join(name));
+            assert_eq!(a.len(), b.len(), "{name:?}: the same nodes");
+            for (c, column) in header.iter().enumerate() {
+                let values =
+                    |rows: &[Vec<String>]| -> Vec<f64> { rows.iter().map(|r| r[c].parse().unwrap()).collect() };
+                let (va, vb) = (values(&a), values(&b));
+                if column == "slip" {
+                    assert_eq!(va, vb, "{name:?}: the stick/slip state at every node");
+                    continue;
+                }
+                let scale = va.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+                let worst = va.iter().zip(&vb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(
+                    worst <= FIELD_BOUND * scale,
+                    "{name:?} {column}: {worst:e} apart, bound {FIELD_BOUND:e} × {scale:e}"
+                );
+            }
+        }
+    }
+
+    /// The case on 1, 2 and 3 ranks: the runs agree with the one-process run.
+    fn agrees_over_ranks(case: &str, args: &[&str]) {
+        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let dir = std::env::temp_dir().join(format!("thermocontact-distributed-{case}-{}", std::process::id()));
+        let one = dir.join("ranks-1");
+        let output = run(1, &one, &args);
+        assert!(output.status.success(), "one process:\n{}", text(&output));
+        for ranks in [2, 3] {
+            let out = dir.join(format!("ranks-{ranks}"));
+            let output = run(ranks, &out, &args);
+            assert!(output.status.success(), "{ranks} ranks:\n{}", text(&output));
+            assert!(
+                text(&output).contains(&format!("distributed over {ranks} ranks")),
+                "{ranks} ranks: the run says so:\n{}",
+                text(&output)
+            );
+            assert_runs_agree(&one, &out);
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn scenario(name: &str) -> String {
+        scenarios().join(name).display().to_string()
+    }
+
+    #[test]
+    fn the_3d_example_on_two_and_three_ranks_equals_one_process() {
+        let toml = scenario("paper3d.toml");
+        agrees_over_ranks(
+            "paper3d",
+            &[
+                &toml,
+                "--set",
+                "mesh.nx=12",
+                "--set",
+                "mesh.ny=3",
+                "--set",
+                "mesh.nz=3",
+                "--set",
+                "time.steps=16",
+                "--set",
+                "time.final_time=0.25",
+                "--set",
+                "output.times=[0.125,0.25]",
+                "--set",
+                "solver.linear=\"iterative\"",
+            ],
+        );
+    }
+
+    #[test]
+    fn the_2d_example_on_two_and_three_ranks_equals_one_process() {
+        let toml = scenario("paper.toml");
+        agrees_over_ranks(
+            "paper2d",
+            &[
+                &toml,
+                "--set",
+                "mesh.nx=32",
+                "--set",
+                "mesh.ny=8",
+                "--set",
+                "time.steps=16",
+                "--set",
+                "solver.linear=\"iterative\"",
+            ],
+        );
+    }
+
+    /// A Gmsh mesh with a curved contact boundary (the brake shoe).
+    #[test]
+    fn a_gmsh_mesh_on_two_and_three_ranks_equals_one_process() {
+        let toml = scenario("brake_shoe.toml");
+        agrees_over_ranks(
+            "brake_shoe",
+            &[
+                &toml,
+                "--set",
+                "time.steps=8",
+                "--set",
+                "time.final_time=0.5",
+                "--set",
+                "output.times=[0.25,0.5]",
+                "--set",
+                "solver.linear=\"iterative\"",
+            ],
+        );
+    }
+
+    /// The direct path over ranks is refused naming `solver.linear`, once, with a non-zero
+    /// status; a step forced not to converge (a Krylov cap of 2, no cutback) ends every rank
+    /// with a non-zero status, the error once, and rank 0's folder says `failed`.
+    #[test]
+    fn the_direct_path_is_refused_and_a_failed_step_ends_every_rank() {
+        let dir = std::env::temp_dir().join(format!("thermocontact-distributed-fail-{}", std::process::id()));
+        let small = |extra: &[&str]| -> Vec<String> {
+            let mut args = vec![scenario("paper3d.toml")];
+            for a in [
+                "--set",
+                "mesh.nx=12",
+                "--set",
+                "mesh.ny=3",
+                "--set",
+                "mesh.nz=3",
+                "--set",
+                "time.steps=4",
+                "--set",
+                "time.final_time=0.0625",
+                "--set",
+                "output.times=[0.0625]",
+            ]
+            .iter()
+            .chain(extra)
+            {
+                args.push(a.to_string());
+            }
+            args
+        };
+        let refused = run(2, &dir.join("direct"), &small(&["--set", "solver.linear=\"direct\""]));
+        let said = text(&refused);
+        assert!(!refused.status.success(), "refused:\n{said}");
+        assert_eq!(said.matches("error: solver.linear = \"direct\"").count(), 1, "{said}");
+        assert!(!dir.join("direct").join("summary.json").exists(), "nothing written");
+
+        let failed = run(
+            2,
+            &dir.join("failed"),
+            &small(&["--set", "solver.max_krylov=2", "--set", "solver.cutback=false"]),
+        );
+        let said = text(&failed);
+        assert!(!failed.status.success(), "a failed step:\n{said}");
+        assert!(!said.contains("timeout"), "no hang:\n{said}");
+        assert_eq!(said.matches("did not converge").count(), 1, "the error once:\n{said}");
+        let summary = std::fs::read_to_string(dir.join("failed").join("summary.json")).unwrap();
+        assert!(summary.contains("\"failed\""), "{summary}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
