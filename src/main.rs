@@ -309,6 +309,9 @@ mod ranks {
         if let Ok(comm) = thermocontact::la::mpi::Communicator::world() {
             if rank == 0 {
                 eprintln!("{message}");
+                // mpirun forwards the ranks' output as it comes: time for the message to leave
+                // before MPI_Abort ends the ranks.
+                std::thread::sleep(std::time::Duration::from_millis(500));
                 comm.abort_all(
                     "the run failed on rank 0 (the error above); every rank ends",
                     i32::from(code),
@@ -383,8 +386,9 @@ fn stopped_run_hint(out: &std::path::Path) -> String {
 /// no checkpoint and sometimes a half-written frame), and the message says what is then lost.
 ///
 /// The signals are read on a thread of their own (`signal_hook::iterator`), not in a handler,
-/// so it may count them and print.
-fn stop_on_signals() -> anyhow::Result<StopFlag> {
+/// so it may count them and print (`say`: rank 0 of a distributed run, whose ranks agree on the
+/// stop after each step, or the one process).
+fn stop_on_signals(say: bool) -> anyhow::Result<StopFlag> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let flag = StopFlag::new();
     let stop = flag.clone();
@@ -396,6 +400,8 @@ fn stop_on_signals() -> anyhow::Result<StopFlag> {
                 _ => Interruption::Interrupt,
             };
             match heard {
+                0 if !say => stop.request(cause),
+                1 if !say => stop.request_now(cause),
                 0 => {
                     stop.request(cause);
                     eprintln!(
@@ -617,7 +623,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 log: root,
                 overwrite,
                 replace_completed,
-                stop: Some(stop_on_signals()?),
+                stop: Some(stop_on_signals(root)?),
                 restart,
                 ..RunOptions::default()
             };

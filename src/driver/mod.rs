@@ -210,7 +210,10 @@ pub fn run_observed(
             progress,
             frames,
             checkpoints: Checkpoints::new(files, plan.checkpoint_every, problem.time.steps),
-            stop: Stop(options.stop.as_ref()),
+            stop: Stop {
+                flag: options.stop.as_ref(),
+                over_ranks: params.krylov.distributed,
+            },
         };
         let (last, failure) = march(problem, &levels, first, &mut observers, &mut observer);
         finish(last, failure, observers, files)
@@ -239,7 +242,10 @@ fn march(
     o.recorder.marching();
     o.progress.marching();
     // A stop requested "now" cuts the step short inside its loops (`step::abort`).
-    let _abort = o.stop.0.map(|flag| crate::step::abort::abort_on(flag.now()));
+    let _abort = o
+        .stop
+        .cuts_steps_short()
+        .map(|flag| crate::step::abort::abort_on(flag.now()));
     // A step that runs long reports its outer iterations (`step::heartbeat`).
     let _heartbeat = o.progress.heartbeat();
     crate::step::heartbeat::step_started(first.n + 1, problem.time.time(first.n + 1));

@@ -74,9 +74,44 @@ impl StopFlag {
 }
 
 /// The stop observer: the run's flag (if it has one), read after each step.
-pub(super) struct Stop<'a>(pub Option<&'a StopFlag>);
+///
+/// **Over ranks** (a distributed run, `mpirun`): each rank has its own flag, set by the signal
+/// it receives (Open MPI's `mpirun` passes a Ctrl-C on as SIGTERM to every rank, then SIGKILL
+/// after `odls_base_sigkill_timeout`, 1 s by default), maybe during different steps. So the
+/// ranks agree after each step (the largest request over the ranks, one reduction of one
+/// integer) and stop after the same one; a step is not cut short (ranks leaving a step at
+/// different iterations would wait for each other in the next collective call).
+pub(super) struct Stop<'a> {
+    pub flag: Option<&'a StopFlag>,
+    /// The run's steps are collective over the ranks of MPI's world.
+    pub over_ranks: bool,
+}
 
 impl Stop<'_> {
+    /// The flag that cuts a step short from outside ([`crate::step::abort`]): none over ranks.
+    pub fn cuts_steps_short(&self) -> Option<&StopFlag> {
+        self.flag.filter(|_| !self.over_ranks)
+    }
+
+    /// Why the run was asked to stop, if it was: over ranks, the request of any rank.
+    fn requested(&self) -> Result<Option<Interruption>, Error> {
+        let local = self.flag.and_then(StopFlag::requested);
+        if !self.over_ranks {
+            return Ok(local);
+        }
+        #[cfg(feature = "mpi")]
+        {
+            use crate::la::mpi::{Communicator, Reduction};
+            let comm = Communicator::world().map_err(crate::step::StepError::from)?;
+            let mut code = [local.map_or(0, StopFlag::code)];
+            comm.all_reduce_usize(&mut code, Reduction::Max)
+                .map_err(crate::step::StepError::from)?;
+            Ok(CAUSES.get(code[0].wrapping_sub(1)).copied())
+        }
+        #[cfg(not(feature = "mpi"))]
+        Ok(local)
+    }
+
     /// The error that ended the march at `last`, as the run reports it: a step cut short
     /// ([`StepError::Aborted`]) is the interruption it was asked for, after `last`.
     pub fn reported(&self, error: Error, last: &State) -> Error {
@@ -84,7 +119,7 @@ impl Stop<'_> {
             Error::Step(StepError::Aborted) => Error::Interrupted {
                 step: last.n,
                 time: last.t,
-                cause: self.0.and_then(StopFlag::requested).unwrap_or(Interruption::Caller),
+                cause: self.flag.and_then(StopFlag::requested).unwrap_or(Interruption::Caller),
             },
             other => other,
         }
@@ -92,7 +127,7 @@ impl Stop<'_> {
 
     /// After the step that reached `state`: [`Error::Interrupted`] where a stop was requested.
     pub fn step(&self, state: &State) -> Result<(), Error> {
-        match self.0.and_then(StopFlag::requested) {
+        match self.requested()? {
             Some(cause) => Err(Error::Interrupted {
                 step: state.n,
                 time: state.t,
