@@ -462,20 +462,7 @@ impl DistributedMatrix {
         check("KSPSolve", unsafe {
             tc_dist_solve(dist, owned.as_mut_ptr(), &mut iterations, &mut residual, &mut reason)
         })?;
-        let info = DistributedSolveInfo {
-            iterations: iterations as usize,
-            residual,
-        };
-        if reason <= 0 {
-            return Err(Error::KrylovNotConverged {
-                method: "GMRES (PETSc, distributed)",
-                iterations: info.iterations,
-                rtol: params.rtol,
-                residual,
-                history: Vec::new(),
-            });
-        }
-        Ok((owned, info))
+        Ok((owned, solved(params, iterations, residual, reason)?))
     }
 
     /// The Krylov solver of `params`, set up where the last solve had other parameters (the
@@ -527,20 +514,7 @@ impl DistributedMatrix {
                 &mut reason,
             )
         })?;
-        let info = DistributedSolveInfo {
-            iterations: iterations as usize,
-            residual,
-        };
-        if reason <= 0 {
-            return Err(Error::KrylovNotConverged {
-                method: "GMRES (PETSc, distributed)",
-                iterations: info.iterations,
-                rtol: params.rtol,
-                residual,
-                history: Vec::new(),
-            });
-        }
-        Ok(info)
+        solved(params, iterations, residual, reason)
     }
 
     /// The last solution, whole, on every rank (PETSc's scatter to all, made once); collective.
@@ -564,6 +538,29 @@ impl DistributedMatrix {
         })?;
         Ok(comm.is_root().then_some(all))
     }
+}
+
+/// What a solve did, from PETSc's iteration count, final relative residual and converged reason
+/// (≤ 0: not converged, an error with the figures).
+fn solved(
+    params: &DistributedKrylov,
+    iterations: c_int,
+    residual: f64,
+    reason: c_int,
+) -> Result<DistributedSolveInfo, Error> {
+    if reason <= 0 {
+        return Err(Error::KrylovNotConverged {
+            method: "GMRES (PETSc, distributed)",
+            iterations: iterations as usize,
+            rtol: params.rtol,
+            residual,
+            history: Vec::new(),
+        });
+    }
+    Ok(DistributedSolveInfo {
+        iterations: iterations as usize,
+        residual,
+    })
 }
 
 /// A distributed vector with ghosts (PETSc's `VecGhost`): this rank's owned entries (PETSc's
