@@ -112,15 +112,14 @@ mod distributed {
     }
 
     /// The case on 1, 2 and 3 ranks: the runs agree with the one-process run.
-    fn agrees_over_ranks(case: &str, args: &[&str]) {
-        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    fn agrees_over_ranks(case: &str, args: &[String]) {
         let dir = std::env::temp_dir().join(format!("thermocontact-distributed-{case}-{}", std::process::id()));
         let one = dir.join("ranks-1");
-        let output = run(1, &one, &args);
+        let output = run(1, &one, args);
         assert!(output.status.success(), "one process:\n{}", text(&output));
         for ranks in [2, 3] {
             let out = dir.join(format!("ranks-{ranks}"));
-            let output = run(ranks, &out, &args);
+            let output = run(ranks, &out, args);
             assert!(output.status.success(), "{ranks} ranks:\n{}", text(&output));
             assert!(
                 text(&output).contains(&format!("distributed over {ranks} ranks")),
@@ -136,67 +135,64 @@ mod distributed {
         scenarios().join(name).display().to_string()
     }
 
+    /// The arguments of `run`: the scenario `name`, then `--set` for each of `sets`.
+    fn scenario_with(name: &str, sets: &[&str]) -> Vec<String> {
+        let mut args = vec![scenario(name)];
+        for set in sets {
+            args.extend(["--set".to_string(), set.to_string()]);
+        }
+        args
+    }
+
     #[test]
     fn the_3d_example_on_two_and_three_ranks_equals_one_process() {
-        let toml = scenario("paper3d.toml");
         agrees_over_ranks(
             "paper3d",
-            &[
-                &toml,
-                "--set",
-                "mesh.nx=12",
-                "--set",
-                "mesh.ny=3",
-                "--set",
-                "mesh.nz=3",
-                "--set",
-                "time.steps=16",
-                "--set",
-                "time.final_time=0.25",
-                "--set",
-                "output.times=[0.125,0.25]",
-                "--set",
-                "solver.linear=\"iterative\"",
-            ],
+            &scenario_with(
+                "paper3d.toml",
+                &[
+                    "mesh.nx=12",
+                    "mesh.ny=3",
+                    "mesh.nz=3",
+                    "time.steps=16",
+                    "time.final_time=0.25",
+                    "output.times=[0.125,0.25]",
+                    "solver.linear=\"iterative\"",
+                ],
+            ),
         );
     }
 
     #[test]
     fn the_2d_example_on_two_and_three_ranks_equals_one_process() {
-        let toml = scenario("paper.toml");
         agrees_over_ranks(
             "paper2d",
-            &[
-                &toml,
-                "--set",
-                "mesh.nx=32",
-                "--set",
-                "mesh.ny=8",
-                "--set",
-                "time.steps=16",
-                "--set",
-                "solver.linear=\"iterative\"",
-            ],
+            &scenario_with(
+                "paper.toml",
+                &[
+                    "mesh.nx=32",
+                    "mesh.ny=8",
+                    "time.steps=16",
+                    "solver.linear=\"iterative\"",
+                ],
+            ),
         );
     }
 
     /// A Gmsh mesh with a curved contact boundary (the brake shoe).
     #[test]
     fn a_gmsh_mesh_on_two_and_three_ranks_equals_one_process() {
-        let toml = scenario("brake_shoe.toml");
         agrees_over_ranks(
             "brake_shoe",
-            &[
-                &toml,
-                "--set",
-                "time.steps=8",
-                "--set",
-                "time.final_time=0.5",
-                "--set",
-                "output.times=[0.25,0.5]",
-                "--set",
-                "solver.linear=\"iterative\"",
-            ],
+            &scenario_with(
+                "brake_shoe.toml",
+                &[
+                    "time.steps=8",
+                    "time.final_time=0.5",
+                    "output.times=[0.25,0.5]",
+                    "solver.linear=\"iterative\"",
+                ],
+            ),
         );
     }
 
@@ -207,29 +203,17 @@ mod distributed {
     fn the_direct_path_is_refused_and_a_failed_step_ends_every_rank() {
         let dir = std::env::temp_dir().join(format!("thermocontact-distributed-fail-{}", std::process::id()));
         let small = |extra: &[&str]| -> Vec<String> {
-            let mut args = vec![scenario("paper3d.toml")];
-            for a in [
-                "--set",
+            let sets = [
                 "mesh.nx=12",
-                "--set",
                 "mesh.ny=3",
-                "--set",
                 "mesh.nz=3",
-                "--set",
                 "time.steps=4",
-                "--set",
                 "time.final_time=0.0625",
-                "--set",
                 "output.times=[0.0625]",
-            ]
-            .iter()
-            .chain(extra)
-            {
-                args.push(a.to_string());
-            }
-            args
+            ];
+            scenario_with("paper3d.toml", &[&sets[..], extra].concat())
         };
-        let refused = run(2, &dir.join("direct"), &small(&["--set", "solver.linear=\"direct\""]));
+        let refused = run(2, &dir.join("direct"), &small(&["solver.linear=\"direct\""]));
         let said = text(&refused);
         assert!(!refused.status.success(), "refused:\n{said}");
         assert_eq!(said.matches("error: solver.linear = \"direct\"").count(), 1, "{said}");
@@ -238,7 +222,7 @@ mod distributed {
         let failed = run(
             2,
             &dir.join("failed"),
-            &small(&["--set", "solver.max_krylov=2", "--set", "solver.cutback=false"]),
+            &small(&["solver.max_krylov=2", "solver.cutback=false"]),
         );
         let said = text(&failed);
         assert!(!failed.status.success(), "a failed step:\n{said}");
@@ -256,28 +240,19 @@ mod distributed {
     #[test]
     fn a_run_stopped_on_two_ranks_continues_on_three_and_on_one() {
         let dir = std::env::temp_dir().join(format!("thermocontact-distributed-restart-{}", std::process::id()));
-        let args: Vec<String> = [
-            scenario("paper3d.toml").as_str(),
-            "--set",
-            "mesh.nx=40",
-            "--set",
-            "mesh.ny=10",
-            "--set",
-            "mesh.nz=10",
-            "--set",
-            "time.steps=16",
-            "--set",
-            "time.final_time=0.25",
-            "--set",
-            "output.times=[0.125,0.25]",
-            "--set",
-            "output.vtk=false",
-            "--set",
-            "solver.linear=\"iterative\"",
-        ]
-        .iter()
-        .map(|a| a.to_string())
-        .collect();
+        let args = scenario_with(
+            "paper3d.toml",
+            &[
+                "mesh.nx=40",
+                "mesh.ny=10",
+                "mesh.nz=10",
+                "time.steps=16",
+                "time.final_time=0.25",
+                "output.times=[0.125,0.25]",
+                "output.vtk=false",
+                "solver.linear=\"iterative\"",
+            ],
+        );
         let whole = dir.join("whole");
         let output = run(1, &whole, &args);
         assert!(output.status.success(), "{}", text(&output));

@@ -178,8 +178,7 @@ fn ranks_solver(
         max_iterations,
         restart: params.restart,
     };
-    let gamg = params.preconditioner == PreconditionerKind::Amg;
-    let first = if gamg {
+    let first = if params.preconditioner == PreconditionerKind::Amg {
         DistributedPreconditioner::Gamg
     } else {
         DistributedPreconditioner::BlockJacobiIlu0
@@ -190,7 +189,6 @@ fn ranks_solver(
         let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step(), None)?;
         let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
         let mut x = vec![0.0; b.len()];
-        ranks.set_preconditioner(first);
         let probe = krylov(first, 1e-8, PreconditionerKind::AUTO_AMG_ABOVE);
         let needs_amg = match ranks.probe(&probe, &b, &mut x) {
             Ok(_) => false,
