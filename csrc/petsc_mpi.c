@@ -138,6 +138,10 @@ struct tc_dist {
   /* The scatter of x to every rank and its whole copy, made at the first tc_dist_all_gather. */
   VecScatter to_all;
   Vec        whole;
+  /* The caller's preconditioner of this rank's block (preconditioner 2), set for the length of
+   * one tc_dist_solve_from: z = M_r^-1 r on the owned entries, 0 on success. */
+  int (*block_apply)(void *ctx, const double *r, double *z, int n);
+  void *block_ctx;
 };
 typedef struct tc_dist tc_dist;
 
@@ -171,6 +175,8 @@ static PetscErrorCode tc_dist_setup(tc_dist *dist, int n_owned, int n_global, in
     j[e] = cols[e];
   }
   PetscCall(MatSetPreallocationCOO(dist->A, (PetscCount)n_coo, i, j));
+  /* tc_dist_set_rows changes values, never the pattern. */
+  PetscCall(MatSetOption(dist->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
   PetscCall(PetscFree2(i, j));
   dist->n_coo = (PetscCount)n_coo;
   PetscCall(MatCreateVecs(dist->A, &dist->x, &dist->b));
@@ -201,9 +207,48 @@ int tc_dist_set_values(tc_dist *dist, const double *values)
   return (int)MatSetValuesCOO(dist->A, values, INSERT_VALUES);
 }
 
+/* PCApply of block Jacobi with the caller's preconditioner of each rank's block: the owned
+ * entries of r through dist->block_apply. */
+static PetscErrorCode tc_dist_block_apply(PC pc, Vec r, Vec z)
+{
+  tc_dist           *dist;
+  const PetscScalar *rv;
+  PetscScalar       *zv;
+  PetscInt           n;
+  int                code;
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &dist));
+  PetscCheck(dist->block_apply, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no block preconditioner given for this solve");
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetArrayRead(r, &rv));
+  PetscCall(VecGetArrayWrite(z, &zv));
+  code = dist->block_apply(dist->block_ctx, rv, zv, (int)n);
+  PetscCall(VecRestoreArrayWrite(z, &zv));
+  PetscCall(VecRestoreArrayRead(r, &rv));
+  PetscCheck(code == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "the block preconditioner of this rank failed (%d)", code);
+  PetscFunctionReturn(0);
+}
+
+/* The values of n_rows of this rank's rows (global rows[r], its entries ptr[r]..ptr[r + 1] of
+ * cols and values), every entry in the pattern, the other rows unchanged; collective (the
+ * assembly). For the few rows a linearization changes: MatSetValuesCOO sets every value. */
+int tc_dist_set_rows(tc_dist *dist, int n_rows, const int *rows, const long long *ptr, const int *cols,
+                     const double *values)
+{
+  PetscFunctionBeginUser;
+  for (int r = 0; r < n_rows; ++r) {
+    PetscInt row = rows[r], n = (PetscInt)(ptr[r + 1] - ptr[r]);
+    PetscCall(MatSetValues(dist->A, 1, &row, n, &cols[ptr[r]], &values[ptr[r]], INSERT_VALUES));
+  }
+  PetscCall(MatAssemblyBegin(dist->A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(dist->A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(0);
+}
+
 /* The Krylov solver on the current values: GMRES(restart) with block Jacobi + ILU(0)
- * (preconditioner 0) or GAMG (1), relative tolerance rtol, at most max_its iterations; options
- * under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
+ * (preconditioner 0), GAMG (1) or block Jacobi with the caller's block preconditioner (2, a
+ * PCSHELL, given to each tc_dist_solve_from), relative tolerance rtol, at most max_its
+ * iterations; options under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
 static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
 {
   PC pc;
@@ -220,6 +265,11 @@ static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, do
   PetscCall(KSPGetPC(dist->ksp, &pc));
   if (preconditioner == 1) {
     PetscCall(PCSetType(pc, PCGAMG));
+  } else if (preconditioner == 2) {
+    PetscCall(PCSetType(pc, PCSHELL));
+    PetscCall(PCShellSetContext(pc, dist));
+    PetscCall(PCShellSetApply(pc, tc_dist_block_apply));
+    PetscCall(PCShellSetName(pc, "block Jacobi, each rank's block by thermocontact's ILU(0)"));
   } else {
     /* Block Jacobi, one block per rank, each ILU(0) (PETSc's default sub-solver). */
     PetscCall(PCSetType(pc, PCBJACOBI));
@@ -275,10 +325,13 @@ int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residua
 }
 
 /* Solves A x = b with this rank's owned entries of b (`rhs`) and of the initial guess (`owned`,
- * overwritten by the solution): no off-process entries, so no assembly. Iterations, the final
- * relative residual ||b - Ax|| / ||b|| and the converged reason as tc_dist_solve. */
-int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned, int *iterations, double *residual,
-                       int *reason)
+ * overwritten by the solution): no off-process entries, so no assembly. `block_apply` and
+ * `block_ctx`: the block preconditioner of preconditioner 2 for this solve (NULL otherwise).
+ * Iterations, the final relative residual ||b - Ax|| / ||b|| and the converged reason as
+ * tc_dist_solve. */
+int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned,
+                       int (*block_apply)(void *, const double *, double *, int), void *block_ctx,
+                       int *iterations, double *residual, int *reason)
 {
   PetscInt           its, n;
   PetscReal          rnorm, bnorm;
@@ -294,7 +347,12 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned, int *ite
   memcpy(v, owned, (size_t)n * sizeof(double));
   PetscCall(VecRestoreArray(dist->x, &v));
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
-  PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
+  dist->block_apply = block_apply;
+  dist->block_ctx   = block_ctx;
+  PetscErrorCode solved = KSPSolve(dist->ksp, dist->b, dist->x);
+  dist->block_apply = NULL;
+  dist->block_ctx   = NULL;
+  PetscCall(solved);
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
   PetscCall(KSPGetIterationNumber(dist->ksp, &its));
   PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));

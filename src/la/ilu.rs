@@ -130,6 +130,17 @@ impl Ilu0 {
     /// contact rows of a Newton matrix, the iterative path of `crate::step`). From row 0, the two domains
     /// of [`Ilu0::with_domains`] are factored on two threads.
     pub fn refactor_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), Error> {
+        self.refactor_rows_from(first, |i| a.row(i))
+    }
+
+    /// [`Ilu0::refactor_from`] with the rows of A from `first` on given by `row(i)` (column
+    /// indices sorted, A's pattern): a caller that changes a few last rows keeps only those.
+    pub fn refactor_rows_from<'a>(
+        &mut self,
+        first: usize,
+        row: impl Fn(usize) -> (&'a [u32], &'a [f64]) + Sync,
+    ) -> Result<(), Error> {
+        let n = self.inv_diag.len();
         let [first_end, second_end] = self.parts;
         let Ilu0 {
             l_ptr,
@@ -155,21 +166,21 @@ impl Ilu0 {
             let (d1, d2) = inv_diag[..second_end].split_at_mut(first_end);
             // Each domain's rows refer only to its own: its values start at its first row.
             let (r1, r2) = rayon::join(
-                || pattern.factor_rows(a, 0..first_end, 0, (l1, u1, d1), &mut RowScratch::new(a.n)),
+                || pattern.factor_rows(&row, 0..first_end, 0, (l1, u1, d1), &mut RowScratch::new(n)),
                 || {
                     pattern.factor_rows(
-                        a,
+                        &row,
                         first_end..second_end,
                         first_end,
                         (l2, u2, d2),
-                        &mut RowScratch::new(a.n),
+                        &mut RowScratch::new(n),
                     )
                 },
             );
             r1.and(r2)?;
             sequential_from = second_end;
         }
-        pattern.factor_rows(a, sequential_from..a.n, 0, (l_val, u_val, inv_diag), scratch)
+        pattern.factor_rows(&row, sequential_from..n, 0, (l_val, u_val, inv_diag), scratch)
     }
 
     /// Stored entries of L and U (the diagonal included).
@@ -266,9 +277,9 @@ impl RowScratch {
 impl Pattern<'_> {
     /// Factors `rows` (IKJ order), reading the U rows above them: `values` hold the rows from
     /// `base` on, and every row that `rows` refer to lies there.
-    fn factor_rows(
+    fn factor_rows<'a>(
         &self,
-        a: &CsrMatrix,
+        row: &impl Fn(usize) -> (&'a [u32], &'a [f64]),
         rows: std::ops::Range<usize>,
         base: usize,
         (l_val, u_val, inv_diag): RowValues,
@@ -277,7 +288,7 @@ impl Pattern<'_> {
         let (l0, u0) = (self.l_ptr[base], self.u_ptr[base]);
         let RowScratch { dense, in_row } = scratch;
         for i in rows {
-            let (cols, vals) = a.row(i);
+            let (cols, vals) = row(i);
             for (&c, &v) in cols.iter().zip(vals) {
                 dense[c as usize] = v;
                 in_row[c as usize] = true;

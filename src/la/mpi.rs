@@ -38,6 +38,7 @@ use std::ops::Range;
 use std::ptr::NonNull;
 
 use super::error::LaError as Error;
+use super::gmres::Preconditioner;
 use super::petsc::{initialized, last_error, petsc_lock};
 
 #[repr(C)]
@@ -71,6 +72,14 @@ extern "C" {
         out: *mut *mut RawDist,
     ) -> c_int;
     fn tc_dist_set_values(dist: *mut RawDist, values: *const c_double) -> c_int;
+    fn tc_dist_set_rows(
+        dist: *mut RawDist,
+        n_rows: c_int,
+        rows: *const c_int,
+        ptr: *const c_longlong,
+        cols: *const c_int,
+        values: *const c_double,
+    ) -> c_int;
     fn tc_dist_krylov(
         dist: *mut RawDist,
         preconditioner: c_int,
@@ -91,6 +100,8 @@ extern "C" {
         dist: *mut RawDist,
         rhs: *const c_double,
         owned: *mut c_double,
+        block_apply: Option<BlockApply>,
+        block_ctx: *mut c_void,
         iterations: *mut c_int,
         residual: *mut c_double,
         reason: *mut c_int,
@@ -106,6 +117,31 @@ extern "C" {
 #[repr(C)]
 struct RawVec {
     _private: [u8; 0],
+}
+
+/// The C signature of a rank's block preconditioner: z = M⁻¹ r on n owned entries, 0 on success.
+type BlockApply = unsafe extern "C" fn(ctx: *mut c_void, r: *const c_double, z: *mut c_double, n: c_int) -> c_int;
+
+/// [`BlockApply`] for a `&dyn Preconditioner` (the context points at the reference): PETSc's
+/// PCSHELL calls it once per GMRES iteration. A failure or a panic is returned as 1, which the
+/// C layer turns into a PETSc error of this solve.
+unsafe extern "C" fn apply_block(ctx: *mut c_void, r: *const c_double, z: *mut c_double, n: c_int) -> c_int {
+    let applied = std::panic::catch_unwind(|| {
+        // SAFETY: `ctx` is the `&&dyn Preconditioner` that `solve_from` holds for the solve's
+        // length; r and z are PETSc's n owned entries of two distinct vectors.
+        let block = unsafe { &*(ctx as *const &dyn Preconditioner) };
+        let (r, z) = unsafe {
+            (
+                std::slice::from_raw_parts(r, n as usize),
+                std::slice::from_raw_parts_mut(z, n as usize),
+            )
+        };
+        block.apply(r, z)
+    });
+    match applied {
+        Ok(Ok(())) => 0,
+        _ => 1,
+    }
 }
 
 /// A failed call as the error of `operation`.
@@ -304,6 +340,11 @@ pub enum DistributedPreconditioner {
     BlockJacobiIlu0,
     /// PETSc's GAMG on the whole matrix: where the stiffness weighs.
     Gamg,
+    /// Block Jacobi, one block per rank, each block's preconditioner given by the caller to
+    /// each solve ([`DistributedMatrix::solve_from`]'s `block`, run as PETSc's PCSHELL): the
+    /// serial path's single-precision ILU(0), refactored only in the rows a linearization
+    /// changes ([`crate::la::Ilu0::refactor_from`]), where PETSc's own refactors the whole block.
+    BlockJacobiShell,
 }
 
 /// Parameters of the distributed GMRES (PETSc's KSPGMRES, right-preconditioned, stopped on
@@ -430,6 +471,43 @@ impl DistributedMatrix {
         Ok(())
     }
 
+    /// The values of some of this rank's rows, the others unchanged: row `rows[r]` (global,
+    /// owned) gets `values[ptr[r]..ptr[r + 1]]` at the columns `cols[ptr[r]..ptr[r + 1]]`
+    /// (global), every one an entry of the pattern. Collective (every rank calls it, with its
+    /// own rows or none). Where a linearization changes a few rows, this sends only those;
+    /// [`DistributedMatrix::set_values`] sends every value.
+    pub fn set_rows(&mut self, rows: &[usize], ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<(), Error> {
+        const OPERATION: &str = "MatSetValues";
+        assert!(ptr.len() == rows.len() + 1 && ptr.last() == Some(&cols.len()) && cols.len() == values.len());
+        if let Some(&row) = rows.iter().find(|&&row| !self.owned.contains(&row)) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("row {row} is not one of this rank's {:?}", self.owned),
+            });
+        }
+        if let Some(&col) = cols.iter().find(|&&col| col >= self.n_global) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("column {col} in a matrix of {} columns", self.n_global),
+            });
+        }
+        let rows32: Vec<c_int> = rows.iter().map(|&i| i as c_int).collect();
+        let ptr64: Vec<c_longlong> = ptr.iter().map(|&p| p as c_longlong).collect();
+        let cols32: Vec<c_int> = cols.iter().map(|&j| j as c_int).collect();
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle; checked CSR arrays of rows.len() rows.
+        check(OPERATION, unsafe {
+            tc_dist_set_rows(
+                self.handle.as_ptr(),
+                index32(OPERATION, rows.len())?,
+                rows32.as_ptr(),
+                ptr64.as_ptr(),
+                cols32.as_ptr(),
+                values.as_ptr(),
+            )
+        })
+    }
+
     /// Solves A x = b from x = 0, b the sum over the ranks of the entries (`index[e]`,
     /// `value[e]`) (global rows, any rank may name any row): this rank's owned part of x.
     pub fn solve(
@@ -439,6 +517,12 @@ impl DistributedMatrix {
         value: &[f64],
     ) -> Result<(Vec<f64>, DistributedSolveInfo), Error> {
         assert_eq!(index.len(), value.len(), "one value per index");
+        if params.preconditioner == DistributedPreconditioner::BlockJacobiShell {
+            return Err(Error::Petsc {
+                operation: "KSPSolve",
+                detail: "block Jacobi with the caller's blocks takes them in solve_from".into(),
+            });
+        }
         let index32 = index
             .iter()
             .map(|&i| match i < self.n_global {
@@ -476,6 +560,7 @@ impl DistributedMatrix {
                     match params.preconditioner {
                         DistributedPreconditioner::BlockJacobiIlu0 => 0,
                         DistributedPreconditioner::Gamg => 1,
+                        DistributedPreconditioner::BlockJacobiShell => 2,
                     },
                     params.rtol,
                     params.max_iterations.min(c_int::MAX as usize) as c_int,
@@ -489,26 +574,44 @@ impl DistributedMatrix {
 
     /// Solves A x = b by GMRES from the initial guess x: `rhs` and `x` are this rank's owned
     /// entries of b and of x (PETSc's layout), x overwritten by the solution. Converged where
-    /// ‖b − Ax‖ ≤ rtol ‖b‖, as the serial GMRES.
+    /// ‖b − Ax‖ ≤ rtol ‖b‖, as the serial GMRES. `block`: the preconditioner of this rank's
+    /// block (its owned rows and columns, in PETSc's order) for
+    /// [`DistributedPreconditioner::BlockJacobiShell`], which needs one; unused otherwise.
     pub fn solve_from(
         &mut self,
         params: &DistributedKrylov,
         rhs: &[f64],
         x: &mut [f64],
+        block: Option<&dyn Preconditioner>,
     ) -> Result<DistributedSolveInfo, Error> {
         assert!(
             rhs.len() == self.owned.len() && x.len() == self.owned.len(),
             "the owned entries"
         );
+        let shell = params.preconditioner == DistributedPreconditioner::BlockJacobiShell;
+        if shell && block.is_none() {
+            return Err(Error::Petsc {
+                operation: "KSPSolve",
+                detail: "block Jacobi with the caller's blocks, but no block preconditioner given".into(),
+            });
+        }
         let _petsc = petsc_lock();
         self.krylov_for(params)?;
         let (mut iterations, mut residual, mut reason) = (0, 0.0, 0);
-        // SAFETY: a live handle; `rhs` and `x` have this rank's row count.
+        let mut context = block.filter(|_| shell);
+        let (apply, ctx): (Option<BlockApply>, *mut c_void) = match &mut context {
+            Some(block) => (Some(apply_block), (block as *mut &dyn Preconditioner).cast()),
+            None => (None, std::ptr::null_mut()),
+        };
+        // SAFETY: a live handle; `rhs` and `x` have this rank's row count; `ctx` points at
+        // `context`, alive until the call returns (the C layer forgets it then).
         check("KSPSolve", unsafe {
             tc_dist_solve_from(
                 self.handle.as_ptr(),
                 rhs.as_ptr(),
                 x.as_mut_ptr(),
+                apply,
+                ctx,
                 &mut iterations,
                 &mut residual,
                 &mut reason,

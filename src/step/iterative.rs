@@ -86,7 +86,7 @@ impl KrylovSolver {
         match self {
             KrylovSolver::Process(ilu) => ilu.refactor_from(a, first_changed),
             #[cfg(feature = "mpi")]
-            KrylovSolver::Ranks(ranks) => ranks.set_matrix(a),
+            KrylovSolver::Ranks(ranks) => ranks.set_matrix(a, first_changed),
         }
     }
 
@@ -159,16 +159,16 @@ fn ilu_needs_amg(
     }
 }
 
-/// The Krylov solver over the ranks of a distributed run, its preconditioner from
-/// `params.preconditioner`: block Jacobi + ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for
-/// `auto` the serial rule's probe with block Jacobi + ILU(0) (the first step's system from zero
-/// to 10⁻⁸, GAMG where it needs more than [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
+/// The Krylov solver over the ranks of a distributed run (Ã, its order and its first Γ_C row),
+/// its preconditioner from `params.preconditioner`: block Jacobi with each rank's block's
+/// ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for `auto` the serial rule's probe with block
+/// Jacobi (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
+/// [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
 #[cfg(feature = "mpi")]
 fn ranks_solver(
     problem: &Problem,
     rhs: &StepRhs,
-    order: &[usize],
-    a: &CsrMatrix,
+    (a, order, first_contact): (&CsrMatrix, &[usize], usize),
     params: &KrylovParams,
 ) -> Result<KrylovSolver, StepError> {
     use crate::la::mpi::{DistributedKrylov, DistributedPreconditioner};
@@ -181,10 +181,13 @@ fn ranks_solver(
     let first = if params.preconditioner == PreconditionerKind::Amg {
         DistributedPreconditioner::Gamg
     } else {
-        DistributedPreconditioner::BlockJacobiIlu0
+        DistributedPreconditioner::BlockJacobiShell
     };
-    let mut ranks =
-        super::ranks::RankKrylov::new(problem, a, order, krylov(first, params.rtol, params.max_iterations))?;
+    let mut ranks = super::ranks::RankKrylov::new(
+        problem,
+        (a, order, first_contact),
+        krylov(first, params.rtol, params.max_iterations),
+    )?;
     if params.preconditioner == PreconditionerKind::Auto {
         let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step(), None)?;
         let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
@@ -207,8 +210,7 @@ fn ranks_solver(
 fn ranks_solver(
     _problem: &Problem,
     _rhs: &StepRhs,
-    _order: &[usize],
-    _a: &CsrMatrix,
+    _system: (&CsrMatrix, &[usize], usize),
     _params: &KrylovParams,
 ) -> Result<KrylovSolver, StepError> {
     Err(LaError::Petsc {
@@ -258,7 +260,7 @@ impl KrylovSystem {
             })
             .collect();
         let (solver, amg) = if params.distributed {
-            (ranks_solver(problem, &rhs, &order, &a, &params)?, None)
+            (ranks_solver(problem, &rhs, (&a, &order, first_contact), &params)?, None)
         } else {
             let ilu = Ilu0::with_domains(&a, parts)?;
             let with_amg = match params.preconditioner {
@@ -304,7 +306,8 @@ impl KrylovSystem {
         if let KrylovSolver::Ranks(ranks) = &self.lock().1 {
             return match ranks.preconditioner() {
                 crate::la::mpi::DistributedPreconditioner::Gamg => PreconditionerKind::Amg,
-                crate::la::mpi::DistributedPreconditioner::BlockJacobiIlu0 => PreconditionerKind::Ilu,
+                crate::la::mpi::DistributedPreconditioner::BlockJacobiIlu0
+                | crate::la::mpi::DistributedPreconditioner::BlockJacobiShell => PreconditionerKind::Ilu,
             };
         }
         if self.amg.is_some() {

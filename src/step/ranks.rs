@@ -9,8 +9,10 @@
 //! ([`MeshPartition`]: PT-Scotch on the dual graph, computed on rank 0 and broadcast;
 //! [`DofLayout`]: each rank's unknowns consecutive), hands them to PETSc's MPIAIJ matrix as
 //! values of a COO pattern fixed at set-up ([`DistributedMatrix::set_values`], after each
-//! linearization), and GMRES runs with block Jacobi + ILU(0) (one block per rank) or GAMG, from
-//! the previous iterate as the serial solves do. The solution is gathered on every rank
+//! linearization), and GMRES runs with block Jacobi (one block per rank) or GAMG, from the
+//! previous iterate as the serial solves do. Each rank's unknowns are numbered in the system's
+//! order, so its block has its Γ_C rows last and its ILU(0) is the serial path's: single
+//! precision, refactored only from the first row a linearization changes ([`RankBlock`]). The solution is gathered on every rank
 //! (PETSc's scatter to all), so that the nodal law, the stop tests, the slip counts and the
 //! cutback decision are computed from the same numbers on every rank and agree without a
 //! reduction: the ranks take the same branches by construction.
@@ -28,46 +30,131 @@
 //! [`crate::partition`] (the layout), [`crate::model`].
 
 use crate::la::mpi::{Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
-use crate::la::{CsrMatrix, LaError, SolveInfo};
+use crate::la::{CsrMatrix, Ilu0, LaError, Preconditioner, SolveInfo};
 use crate::model::{node_unknowns, Problem};
 use crate::partition::{DofLayout, MeshPartition};
 
 /// The Krylov solver of Ã x = b̃ over the ranks: Ã's rows that this rank owns in PETSc's
-/// matrix, and the maps between the serial system's order and PETSc's layout.
+/// matrix, the maps between the serial system's order and PETSc's layout, and the
+/// preconditioner of this rank's block where block Jacobi uses this crate's ILU(0).
 pub(crate) struct RankKrylov {
     matrix: DistributedMatrix,
     /// For each of this rank's COO pairs, the index of its value in Ã's values.
     value_of_pair: Vec<usize>,
-    /// The row of Ã (the system's order) of each global index this rank owns, in order.
+    /// The row of Ã (the system's order) of each global index this rank owns, in order:
+    /// ascending, so that PETSc's order of a rank's rows is the system's.
     owned_rows: Vec<usize>,
     /// The global index (PETSc's layout) of each row of Ã.
     global_of_row: Vec<usize>,
     params: DistributedKrylov,
     values: Vec<f64>,
+    /// This rank's diagonal block of Ã and its ILU(0), for
+    /// [`DistributedPreconditioner::BlockJacobiShell`].
+    block: Option<Box<RankBlock>>,
+    /// The first row of Ã (the system's order) that a linearization changes.
+    first_changing: usize,
+}
+
+/// The ILU(0) of this rank's diagonal block of Ã (its owned rows and columns, in the system's
+/// order, so with its Γ_C tangential rows last) in single precision, which each linearization
+/// refactors from the rank's first Γ_C row on, as the serial path does
+/// ([`Ilu0::refactor_rows_from`]); only those rows of the block are kept. PETSc's block Jacobi
+/// with ILU(0) refactors the whole block after each linearization, in double precision (2.4 of
+/// 8.1 s of Krylov solves at 98k unknowns on 2 ranks, docs/distributed.md).
+struct RankBlock {
+    ilu: Ilu0,
+    /// The block's rows from `first_changing` on: offsets, local columns, values.
+    changing: (Vec<usize>, Vec<u32>, Vec<f64>),
+    /// The first row of the block a linearization changes.
+    first_changing: usize,
+    /// For each value of `changing`, the index of its value in Ã's values.
+    value_of_entry: Vec<usize>,
+}
+
+impl RankBlock {
+    /// The ILU(0) of the block of Ã at the system rows `owned_rows` (ascending), the rows from
+    /// the system row `first_changing` on kept for [`RankBlock::update`].
+    fn new(a: &CsrMatrix, owned_rows: &[usize], first_changing: usize) -> Result<Self, LaError> {
+        let mut local_of_row = vec![u32::MAX; a.n()];
+        owned_rows
+            .iter()
+            .enumerate()
+            .for_each(|(local, &row)| local_of_row[row] = local as u32);
+        let first = owned_rows.partition_point(|&row| row < first_changing);
+        let (mut ptr, mut col, mut val, mut value_of_entry) = (vec![0], Vec::new(), Vec::new(), Vec::new());
+        for (i, &row) in owned_rows.iter().enumerate() {
+            let (cols, values) = a.row(row);
+            for ((p, &c), &v) in a.offset_from(0, row).zip(cols).zip(values) {
+                let local = local_of_row[c as usize];
+                if local != u32::MAX {
+                    col.push(local);
+                    val.push(v);
+                    if i >= first {
+                        value_of_entry.push(p);
+                    }
+                }
+            }
+            ptr.push(col.len());
+        }
+        drop(local_of_row);
+        let start = ptr[first];
+        let changing = (
+            ptr[first..].iter().map(|&p| p - start).collect(),
+            col[start..].to_vec(),
+            val[start..].to_vec(),
+        );
+        let ilu = Ilu0::new(&CsrMatrix::from_rows(owned_rows.len(), ptr, col, val))?;
+        Ok(RankBlock {
+            ilu,
+            changing,
+            first_changing: first,
+            value_of_entry,
+        })
+    }
+
+    /// The block's changing rows again from Ã's values (no row before them changed),
+    /// refactored.
+    fn update(&mut self, a: &CsrMatrix) -> Result<(), LaError> {
+        let all = a.values_from(0);
+        let (ptr, col, val) = &mut self.changing;
+        val.iter_mut().zip(&self.value_of_entry).for_each(|(v, &p)| *v = all[p]);
+        let first = self.first_changing;
+        let (ptr, col, val) = (&*ptr, &*col, &*val);
+        self.ilu.refactor_rows_from(first, |i| {
+            let range = ptr[i - first]..ptr[i - first + 1];
+            (&col[range.clone()], &val[range])
+        })
+    }
 }
 
 impl RankKrylov {
     /// Partitions the mesh (on rank 0), lays the unknowns out and sets PETSc's matrix up with
-    /// this rank's rows of `a` (the system's rows, row i the unknown `order[i]`); collective.
+    /// this rank's rows of `a` (the system's rows, row i the unknown `order[i]`, the rows from
+    /// `first_changing` on those a linearization changes); collective.
     pub(crate) fn new(
         problem: &Problem,
-        a: &CsrMatrix,
-        order: &[usize],
+        (a, order, first_changing): (&CsrMatrix, &[usize], usize),
         params: DistributedKrylov,
     ) -> Result<Self, LaError> {
         let comm = Communicator::world()?;
         let partition = MeshPartition::on_root(&comm, &problem.mesh)?;
         let layout = DofLayout::new(&partition, order.len(), |p, out| node_unknowns(problem, p, out));
-        let global_of_row: Vec<usize> = order.iter().map(|&u| layout.index_of[u]).collect();
-        let mut row_of_global = vec![0; order.len()];
-        global_of_row
-            .iter()
-            .enumerate()
-            .for_each(|(row, &g)| row_of_global[g] = row);
-        let owned = layout.owned(comm.rank());
-        let owned_rows: Vec<usize> = owned.clone().map(|g| row_of_global[g]).collect();
+        // Each rank's unknowns as the layout gives them, numbered in the system's order.
+        let mut row_of_unknown = vec![0; order.len()];
+        order.iter().enumerate().for_each(|(row, &u)| row_of_unknown[u] = row);
+        let mut global_of_row = vec![0; order.len()];
+        let mut owned_rows = Vec::new();
+        for rank in 0..comm.size() {
+            let owned = layout.owned(rank);
+            let mut rows: Vec<usize> = layout.order[owned.clone()].iter().map(|&u| row_of_unknown[u]).collect();
+            rows.sort_unstable();
+            rows.iter().zip(owned).for_each(|(&row, g)| global_of_row[row] = g);
+            if rank == comm.rank() {
+                owned_rows = rows;
+            }
+        }
         let (mut rows, mut cols, mut value_of_pair) = (Vec::new(), Vec::new(), Vec::new());
-        for (g, &row) in owned.zip(&owned_rows) {
+        for (g, &row) in layout.owned(comm.rank()).zip(&owned_rows) {
             let range = a.offset_from(0, row);
             for (p, &col) in range.clone().zip(a.row(row).0) {
                 rows.push(g);
@@ -76,6 +163,7 @@ impl RankKrylov {
             }
         }
         let matrix = DistributedMatrix::new(&comm, owned_rows.len(), 1, &rows, &cols)?;
+        drop((rows, cols));
         let mut solver = RankKrylov {
             matrix,
             values: vec![0.0; value_of_pair.len()],
@@ -83,16 +171,50 @@ impl RankKrylov {
             owned_rows,
             global_of_row,
             params,
+            block: None,
+            first_changing,
         };
-        solver.set_matrix(a)?;
+        solver.set_matrix(a, 0)?;
         Ok(solver)
     }
 
-    /// Ã's values into PETSc's matrix (this rank's rows); collective.
-    pub(crate) fn set_matrix(&mut self, a: &CsrMatrix) -> Result<(), LaError> {
-        let all = a.values_from(0);
-        (self.values.iter_mut().zip(&self.value_of_pair)).for_each(|(v, &p)| *v = all[p]);
-        self.matrix.set_values(&self.values)
+    /// Ã's values into PETSc's matrix (this rank's rows), and into this rank's block, whose
+    /// rows from Ã's row `first_changed` on are refactored; collective.
+    pub(crate) fn set_matrix(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
+        let first = self.owned_rows.partition_point(|&row| row < first_changed);
+        if first == 0 {
+            let all = a.values_from(0);
+            (self.values.iter_mut().zip(&self.value_of_pair)).for_each(|(v, &p)| *v = all[p]);
+            self.matrix.set_values(&self.values)?;
+        } else {
+            self.set_rows_from(a, first)?;
+        }
+        match (&mut self.block, self.params.preconditioner) {
+            (Some(block), DistributedPreconditioner::BlockJacobiShell) if first_changed >= self.first_changing => {
+                block.update(a)
+            }
+            (_, DistributedPreconditioner::BlockJacobiShell) => {
+                self.block = Some(Box::new(RankBlock::new(a, &self.owned_rows, self.first_changing)?));
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// This rank's rows of Ã from its `first` owned row on (in the system's order, so the rows
+    /// a linearization changes are a rank's last) into PETSc's matrix; collective.
+    fn set_rows_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), LaError> {
+        let rows = &self.owned_rows[first..];
+        let start = self.matrix.owned().start + first;
+        let (mut ptr, mut cols, mut values) = (vec![0], Vec::new(), Vec::new());
+        for &row in rows {
+            let (c, v) = a.row(row);
+            cols.extend(c.iter().map(|&c| self.global_of_row[c as usize]));
+            values.extend_from_slice(v);
+            ptr.push(cols.len());
+        }
+        let globals: Vec<usize> = (start..start + rows.len()).collect();
+        self.matrix.set_rows(&globals, &ptr, &cols, &values)
     }
 
     /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x whole, in the system's order, the same
@@ -100,7 +222,8 @@ impl RankKrylov {
     pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
         let owned_rhs: Vec<f64> = self.owned_rows.iter().map(|&row| rhs[row]).collect();
         let mut owned_x: Vec<f64> = self.owned_rows.iter().map(|&row| x[row]).collect();
-        let solved = self.matrix.solve_from(&self.params, &owned_rhs, &mut owned_x);
+        let block = self.block.as_ref().map(|b| &b.ilu as &dyn Preconditioner);
+        let solved = self.matrix.solve_from(&self.params, &owned_rhs, &mut owned_x, block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = solved?;
         let whole = self.matrix.all_gather()?;
@@ -133,6 +256,9 @@ impl RankKrylov {
     /// Switches the preconditioner (the `auto` probe's choice).
     pub(crate) fn set_preconditioner(&mut self, preconditioner: DistributedPreconditioner) {
         self.params.preconditioner = preconditioner;
+        if preconditioner != DistributedPreconditioner::BlockJacobiShell {
+            self.block = None;
+        }
     }
 
     /// Stored entries of Ã on this rank.
