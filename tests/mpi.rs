@@ -22,7 +22,7 @@ mod distributed {
     use thermocontact::la::mpi::{
         Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, GhostedVector, Reduction,
     };
-    use thermocontact::la::QuasiDefiniteLdlt;
+    use thermocontact::la::{CsrMatrix, Ilu0, QuasiDefiniteLdlt};
     use thermocontact::mesh::cuboid;
     use thermocontact::model::{samples, DistributedStepMatrix, Problem, State, StepMatrix};
     use thermocontact::partition::{DofLayout, MeshPartition};
@@ -190,6 +190,56 @@ mod distributed {
         }
         let whole = matrix.gather_on_root(comm).unwrap();
         assert_eq!(whole.map(|w| w.len()), comm.is_root().then_some(n));
+        a_changed_row_solved_with_the_callers_blocks_is_exact(matrix, h);
+    }
+
+    /// The same system with each rank's last row (and its load) doubled through `set_rows`,
+    /// solved from zero by GMRES with block Jacobi whose blocks apply the ILU(0) of each rank's
+    /// tridiagonal block (exact there) through PETSc's PCSHELL: the same exact nodal values. The
+    /// shell without a block preconditioner is an error, not a crash.
+    fn a_changed_row_solved_with_the_callers_blocks_is_exact(mut matrix: DistributedMatrix, h: f64) {
+        let (owned, n) = (matrix.owned(), matrix.n_global());
+        let last = owned.end - 1;
+        let neighbours: Vec<usize> = [last.checked_sub(1), Some(last), Some(last + 1).filter(|&j| j < n)]
+            .into_iter()
+            .flatten()
+            .collect();
+        let doubled: Vec<f64> = neighbours
+            .iter()
+            .map(|&j| if j == last { 4.0 / h } else { -2.0 / h })
+            .collect();
+        matrix
+            .set_rows(&[last], &[0, neighbours.len()], &neighbours, &doubled)
+            .unwrap();
+        let (mut ptr, mut col, mut val) = (vec![0], vec![], vec![]);
+        for i in owned.clone() {
+            for j in [i.checked_sub(1), Some(i), Some(i + 1)].into_iter().flatten() {
+                if owned.contains(&j) {
+                    col.push((j - owned.start) as u32);
+                    let scale = if i == last { 2.0 } else { 1.0 };
+                    val.push(scale * if i == j { 2.0 / h } else { -1.0 / h });
+                }
+            }
+            ptr.push(col.len());
+        }
+        let block = Ilu0::new(&CsrMatrix::from_rows(owned.len(), ptr, col, val)).unwrap();
+        let rhs: Vec<f64> = owned.clone().map(|i| if i == last { 2.0 * h } else { h }).collect();
+        let params = DistributedKrylov {
+            preconditioner: DistributedPreconditioner::BlockJacobiShell,
+            rtol: 1e-12,
+            ..DistributedKrylov::default()
+        };
+        let mut u = vec![0.0; owned.len()];
+        assert!(matrix.solve_from(&params, &rhs, &mut u, None).is_err());
+        let info = matrix.solve_from(&params, &rhs, &mut u, Some(&block)).unwrap();
+        for (i, u) in owned.zip(u) {
+            let x = (i + 1) as f64 * h;
+            assert!(
+                (u - x * (1.0 - x) / 2.0).abs() < 1e-11,
+                "u({x}) = {u} ({} iterations)",
+                info.iterations
+            );
+        }
     }
 
     /// The cells' parts computed on rank 0 reach every rank: the same checksum everywhere. A
