@@ -199,6 +199,44 @@ int tc_dist_create(int n_owned, int n_global, int bs, long long n_coo, const int
   return 0;
 }
 
+/* The matrix from this rank's rows as CSR (n_owned rows; row r's entries ptr[r]..ptr[r + 1] of
+ * the global columns `cols`, ascending within a row, and `values`), preallocated exactly
+ * (MatMPIAIJSetPreallocationCSR, linear in the entries, where the COO preallocation sorts
+ * them); its values are changed by tc_dist_set_rows, never its pattern. */
+static PetscErrorCode tc_dist_setup_csr(tc_dist *dist, int n_owned, int n_global, const long long *ptr, const int *cols,
+                                        const double *values)
+{
+  PetscInt *i, *j;
+  PetscFunctionBeginUser;
+  PetscCall(MatCreate(PETSC_COMM_WORLD, &dist->A));
+  PetscCall(MatSetSizes(dist->A, n_owned, n_owned, n_global, n_global));
+  PetscCall(MatSetType(dist->A, MATMPIAIJ));
+  PetscCall(PetscMalloc2(n_owned + 1, &i, ptr[n_owned], &j));
+  for (int r = 0; r <= n_owned; ++r) i[r] = (PetscInt)ptr[r];
+  for (long long e = 0; e < ptr[n_owned]; ++e) j[e] = cols[e];
+  PetscCall(MatMPIAIJSetPreallocationCSR(dist->A, i, j, values));
+  PetscCall(PetscFree2(i, j));
+  PetscCall(MatSetOption(dist->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
+  PetscCall(MatCreateVecs(dist->A, &dist->x, &dist->b));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_create_csr(int n_owned, int n_global, const long long *ptr, const int *cols, const double *values,
+                       tc_dist **out)
+{
+  PetscErrorCode ierr;
+  *out = NULL;
+  tc_dist *dist = calloc(1, sizeof *dist);
+  if (!dist) return PETSC_ERR_MEM;
+  ierr = tc_dist_setup_csr(dist, n_owned, n_global, ptr, cols, values);
+  if (ierr) {
+    tc_dist_destroy(dist);
+    return (int)ierr;
+  }
+  *out = dist;
+  return 0;
+}
+
 /* The values of the COO pairs, in their order (repeated pairs summed); collective. The Krylov
  * solver, if set up, stays: its preconditioner is set up again on the new values at the next
  * solve (PCSetUp sees the matrix's state change; the pattern is the same). */

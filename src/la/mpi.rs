@@ -71,6 +71,14 @@ extern "C" {
         cols: *const c_int,
         out: *mut *mut RawDist,
     ) -> c_int;
+    fn tc_dist_create_csr(
+        n_owned: c_int,
+        n_global: c_int,
+        ptr: *const c_longlong,
+        cols: *const c_int,
+        values: *const c_double,
+        out: *mut *mut RawDist,
+    ) -> c_int;
     fn tc_dist_set_values(dist: *mut RawDist, values: *const c_double) -> c_int;
     fn tc_dist_set_rows(
         dist: *mut RawDist,
@@ -443,6 +451,62 @@ impl DistributedMatrix {
             owned: first..first + n_owned,
             n_global,
             n_coo: rows.len(),
+            krylov: None,
+        })
+    }
+
+    /// The matrix from this rank's rows (consecutive, after those of the ranks below it) as
+    /// CSR: row r's entries `ptr[r]..ptr[r + 1]` of `cols` (global columns, ascending within the
+    /// row) and `values`. Its pattern is fixed: values change by [`DistributedMatrix::set_rows`]
+    /// (there are no COO pairs for [`DistributedMatrix::set_values`]). Preallocated in time
+    /// linear in the entries (PETSc's CSR preallocation), where the COO one sorts the pairs:
+    /// at 972k unknowns on 2 ranks, 14–17 s of the set-up's 36–40 s (machine loaded).
+    pub fn from_rows(comm: &Communicator, ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<Self, Error> {
+        const OPERATION: &str = "MatMPIAIJSetPreallocationCSR";
+        let n_owned = ptr.len().checked_sub(1).expect("n_owned + 1 offsets");
+        assert!(ptr[0] == 0 && ptr[n_owned] == cols.len() && cols.len() == values.len());
+        let mut counts = vec![0; comm.size()];
+        counts[comm.rank()] = n_owned;
+        comm.all_reduce_usize(&mut counts, Reduction::Sum)?;
+        let n_global: usize = counts.iter().sum();
+        let first: usize = counts[..comm.rank()].iter().sum();
+        if let Some(r) = (0..n_owned).find(|&r| {
+            let row = &cols[ptr[r]..ptr[r + 1]];
+            ptr[r] > ptr[r + 1] || row.windows(2).any(|w| w[0] >= w[1]) || row.last().is_some_and(|&c| c >= n_global)
+        }) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!(
+                    "row {} has columns {:?}, not ascending below {n_global}",
+                    first + r,
+                    &cols[ptr[r]..ptr[r + 1]]
+                ),
+            });
+        }
+        index32(OPERATION, cols.len())?;
+        let ptr64: Vec<c_longlong> = ptr.iter().map(|&p| p as c_longlong).collect();
+        let cols32: Vec<c_int> = cols.iter().map(|&j| j as c_int).collect();
+        let mut raw = std::ptr::null_mut();
+        let _petsc = petsc_lock();
+        // SAFETY: checked CSR arrays of n_owned rows; `raw` is written on success.
+        let code = unsafe {
+            tc_dist_create_csr(
+                index32(OPERATION, n_owned)?,
+                index32(OPERATION, n_global)?,
+                ptr64.as_ptr(),
+                cols32.as_ptr(),
+                values.as_ptr(),
+                &mut raw,
+            )
+        };
+        let handle = NonNull::new(raw)
+            .filter(|_| code == 0)
+            .ok_or_else(|| failed(OPERATION, code))?;
+        Ok(DistributedMatrix {
+            handle,
+            owned: first..first + n_owned,
+            n_global,
+            n_coo: 0,
             krylov: None,
         })
     }

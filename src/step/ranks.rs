@@ -8,8 +8,8 @@
 //! time, runs on PETSc: rank r owns the rows of Ã at the unknowns of its part of the mesh
 //! ([`MeshPartition`]: PT-Scotch on the dual graph, computed on rank 0 and broadcast;
 //! [`DofLayout`]: each rank's unknowns consecutive), hands them to PETSc's MPIAIJ matrix as
-//! values of a COO pattern fixed at set-up ([`DistributedMatrix::set_values`], after each
-//! linearization), and GMRES runs with block Jacobi (one block per rank) or GAMG, from the
+//! CSR rows at set-up ([`DistributedMatrix::from_rows`]) and, after each linearization, only
+//! the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs with block Jacobi (one block per rank) or GAMG, from the
 //! previous iterate as the serial solves do. Each rank's unknowns are numbered in the system's
 //! order, so its block has its Γ_C rows last and its ILU(0) is the serial path's: single
 //! precision, refactored only from the first row a linearization changes ([`RankBlock`]). The solution is gathered on every rank
@@ -39,15 +39,14 @@ use crate::partition::{DofLayout, MeshPartition};
 /// preconditioner of this rank's block where block Jacobi uses this crate's ILU(0).
 pub(crate) struct RankKrylov {
     matrix: DistributedMatrix,
-    /// For each of this rank's COO pairs, the index of its value in Ã's values.
-    value_of_pair: Vec<usize>,
     /// The row of Ã (the system's order) of each global index this rank owns, in order:
     /// ascending, so that PETSc's order of a rank's rows is the system's.
     owned_rows: Vec<usize>,
     /// The global index (PETSc's layout) of each row of Ã.
     global_of_row: Vec<usize>,
     params: DistributedKrylov,
-    values: Vec<f64>,
+    /// Stored entries of this rank's rows.
+    n_entries: usize,
     /// This rank's diagonal block of Ã and its ILU(0), for
     /// [`DistributedPreconditioner::BlockJacobiShell`].
     block: Option<Box<RankBlock>>,
@@ -153,28 +152,32 @@ impl RankKrylov {
                 owned_rows = rows;
             }
         }
-        let (mut rows, mut cols, mut value_of_pair) = (Vec::new(), Vec::new(), Vec::new());
-        for (g, &row) in layout.owned(comm.rank()).zip(&owned_rows) {
-            let range = a.offset_from(0, row);
-            for (p, &col) in range.clone().zip(a.row(row).0) {
-                rows.push(g);
-                cols.push(global_of_row[col as usize]);
-                value_of_pair.push(p);
-            }
+        let n_entries: usize = owned_rows.iter().map(|&row| a.row(row).0.len()).sum();
+        let (mut ptr, mut cols, mut values) = (vec![0], Vec::with_capacity(n_entries), Vec::with_capacity(n_entries));
+        let mut entries = Vec::new();
+        for &row in &owned_rows {
+            let (c, v) = a.row(row);
+            entries.clear();
+            entries.extend(c.iter().map(|&c| global_of_row[c as usize]).zip(v));
+            entries.sort_unstable_by_key(|&(g, _)| g);
+            cols.extend(entries.iter().map(|&(g, _)| g));
+            values.extend(entries.iter().map(|&(_, &v)| v));
+            ptr.push(cols.len());
         }
-        let matrix = DistributedMatrix::new(&comm, owned_rows.len(), 1, &rows, &cols)?;
-        drop((rows, cols));
+        let matrix = DistributedMatrix::from_rows(&comm, &ptr, &cols, &values)?;
+        drop((ptr, cols, values));
         let mut solver = RankKrylov {
             matrix,
-            values: vec![0.0; value_of_pair.len()],
-            value_of_pair,
             owned_rows,
             global_of_row,
             params,
+            n_entries,
             block: None,
             first_changing,
         };
-        solver.set_matrix(a, 0)?;
+        if params.preconditioner == DistributedPreconditioner::BlockJacobiShell {
+            solver.block = Some(Box::new(RankBlock::new(a, &solver.owned_rows, first_changing)?));
+        }
         Ok(solver)
     }
 
@@ -182,13 +185,7 @@ impl RankKrylov {
     /// rows from Ã's row `first_changed` on are refactored; collective.
     pub(crate) fn set_matrix(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
         let first = self.owned_rows.partition_point(|&row| row < first_changed);
-        if first == 0 {
-            let all = a.values_from(0);
-            (self.values.iter_mut().zip(&self.value_of_pair)).for_each(|(v, &p)| *v = all[p]);
-            self.matrix.set_values(&self.values)?;
-        } else {
-            self.set_rows_from(a, first)?;
-        }
+        self.set_rows_from(a, first)?;
         match (&mut self.block, self.params.preconditioner) {
             (Some(block), DistributedPreconditioner::BlockJacobiShell) if first_changed >= self.first_changing => {
                 block.update(a)
@@ -263,6 +260,6 @@ impl RankKrylov {
 
     /// Stored entries of Ã on this rank.
     pub(crate) fn nnz(&self) -> usize {
-        self.value_of_pair.len()
+        self.n_entries
     }
 }
