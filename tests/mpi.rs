@@ -190,10 +190,24 @@ mod distributed {
         }
         let whole = matrix.gather_on_root(comm).unwrap();
         assert_eq!(whole.map(|w| w.len()), comm.is_root().then_some(n));
-        a_changed_row_solved_with_the_callers_blocks_is_exact(matrix, h);
+        let (mut ptr, mut cols, mut values) = (vec![0], vec![], vec![]);
+        for i in matrix.owned() {
+            for j in [i.checked_sub(1), Some(i), Some(i + 1).filter(|&j| j < n)]
+                .into_iter()
+                .flatten()
+            {
+                cols.push(j);
+                values.push(if i == j { 2.0 / h } else { -1.0 / h });
+            }
+            ptr.push(cols.len());
+        }
+        let by_rows = DistributedMatrix::from_rows(comm, &ptr, &cols, &values).unwrap();
+        assert_eq!((by_rows.owned(), by_rows.n_global()), (matrix.owned(), n));
+        a_changed_row_solved_with_the_callers_blocks_is_exact(by_rows, h);
     }
 
-    /// The same system with each rank's last row (and its load) doubled through `set_rows`,
+    /// The same system given as each rank's CSR rows, each rank's last row (and its load) then
+    /// doubled through `set_rows`,
     /// solved from zero by GMRES with block Jacobi whose blocks apply the ILU(0) of each rank's
     /// tridiagonal block (exact there) through PETSc's PCSHELL: the same exact nodal values. The
     /// shell without a block preconditioner is an error, not a crash.
