@@ -6,7 +6,8 @@
 //! Γ_C: 8 bytes per unknown each). Each linearization changes Ã's Γ_C rows in place on every
 //! rank, the same way from the same iterate. The Krylov solve, which is where a step spends its
 //! time, runs on PETSc: rank r owns the rows of Ã at the unknowns of its part of the mesh
-//! ([`MeshPartition`]: PT-Scotch on the dual graph, computed on rank 0 and broadcast;
+//! ([`MeshPartition`](crate::partition::MeshPartition): PT-Scotch on the dual graph, computed
+//! on rank 0 and broadcast once per run, shared with the frames' pieces: [`Problem::partition`];
 //! [`DofLayout`]: each rank's unknowns consecutive), hands them to PETSc's MPIAIJ matrix as
 //! values of a COO pattern fixed at set-up ([`DistributedMatrix::set_values`], after each
 //! linearization), and GMRES runs with block Jacobi + ILU(0) (one block per rank) or GAMG, from
@@ -30,7 +31,7 @@
 use crate::la::mpi::{Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
 use crate::la::{CsrMatrix, LaError, SolveInfo};
 use crate::model::{node_unknowns, Problem};
-use crate::partition::{DofLayout, MeshPartition};
+use crate::partition::DofLayout;
 
 /// The Krylov solver of Ã x = b̃ over the ranks: Ã's rows that this rank owns in PETSc's
 /// matrix, and the maps between the serial system's order and PETSc's layout.
@@ -47,8 +48,9 @@ pub(crate) struct RankKrylov {
 }
 
 impl RankKrylov {
-    /// Partitions the mesh (on rank 0), lays the unknowns out and sets PETSc's matrix up with
-    /// this rank's rows of `a` (the system's rows, row i the unknown `order[i]`); collective.
+    /// Lays the unknowns out over the run's partition of the mesh ([`Problem::partition`]) and
+    /// sets PETSc's matrix up with this rank's rows of `a` (the system's rows, row i the unknown
+    /// `order[i]`); collective.
     pub(crate) fn new(
         problem: &Problem,
         a: &CsrMatrix,
@@ -56,8 +58,8 @@ impl RankKrylov {
         params: DistributedKrylov,
     ) -> Result<Self, LaError> {
         let comm = Communicator::world()?;
-        let partition = MeshPartition::on_root(&comm, &problem.mesh)?;
-        let layout = DofLayout::new(&partition, order.len(), |p, out| node_unknowns(problem, p, out));
+        let partition = problem.partition(&comm)?;
+        let layout = DofLayout::new(partition, order.len(), |p, out| node_unknowns(problem, p, out));
         let global_of_row: Vec<usize> = order.iter().map(|&u| layout.index_of[u]).collect();
         let mut row_of_global = vec![0; order.len()];
         global_of_row
