@@ -1,9 +1,11 @@
 //! `mpirun -n P thermocontact run` (cargo feature `mpi`; docs/distributed.md) against one
 //! process: the same stick/slip state at every step and at every contact node of every output,
-//! the same cutbacks, and fields within the bound the solvers' tolerances give. Also: a
-//! distributed run with the direct path is refused naming `solver.linear`, and a step that
-//! does not converge ends every rank with a non-zero status, the message once and a folder
-//! that says `failed`.
+//! the same cutbacks, and fields within the bound the solvers' tolerances give, in the contact
+//! CSVs and in the frames (each rank's piece, listed by a `.pvtu`, reassembled by the points'
+//! coordinates). Also: a distributed run with the direct path is refused naming
+//! `solver.linear`, and a step that does not converge, or a rank that cannot write its piece of
+//! a frame, ends every rank with a non-zero status, the message once and a folder that says
+//! `failed`.
 //!
 //! **The bound.** Each rank's GMRES stops at ‖b − Ax‖ ≤ 10⁻¹⁰ ‖b‖ as the serial one does, but
 //! with another preconditioner (block Jacobi + ILU(0) over the ranks' parts), so the Newton

@@ -205,9 +205,13 @@ impl<'scope, 'env> Frames<'scope, 'env> {
             Some(writer) => {
                 let (seconds, finished) = writer.finish(tally);
                 waited += clock.elapsed().as_secs_f64();
-                // In pieces the agreement has the errors (an error of this rank's writer
-                // after it is one the run already has).
-                (seconds, if self.listing.is_some() { listed } else { finished })
+                match &self.listing {
+                    // In pieces the agreement has the errors (an error of this rank's writer
+                    // after it is one the run already has), and the frames took the slowest
+                    // rank's time.
+                    Some(listing) => (listing.slowest(seconds), listed),
+                    None => (seconds, finished),
+                }
             }
             None => (0.0, Ok(())),
         };

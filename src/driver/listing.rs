@@ -115,6 +115,11 @@ impl Listing {
         self.ranks.agree(outcome, &mut [])
     }
 
+    /// The slowest rank's `seconds` (collective).
+    pub fn slowest(&self, seconds: f64) -> f64 {
+        self.ranks.max(seconds)
+    }
+
     /// Lists `frames`, written on every rank: their entries in the collection; on rank 0 their
     /// `.pvtu` files, then the collection.
     fn list(&self, frames: Vec<Option<Written>>, tally: &mut Tally) -> Result<(), Error> {

@@ -104,6 +104,23 @@ impl Ranks {
     }
 }
 
+impl Ranks {
+    /// The largest `value` over the ranks (collective; this rank's where the reduction fails):
+    /// the frames' seconds a run reports are its slowest rank's.
+    pub fn max(&self, value: f64) -> f64 {
+        #[cfg(feature = "mpi")]
+        {
+            use crate::la::mpi::{Communicator, Reduction};
+            let mut values = [value];
+            let reduced = Communicator::world().and_then(|comm| comm.all_reduce_f64(&mut values, Reduction::Max));
+            if reduced.is_ok() {
+                return values[0];
+            }
+        }
+        value
+    }
+}
+
 /// The `text` of the one rank that has one, on every rank (collective). Two sums over the
 /// ranks, the others adding zeros: the communicator broadcasts from rank 0 only, and this runs
 /// once, where a run fails.
