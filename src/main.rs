@@ -611,14 +611,14 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             if size > 1 && root {
                 println!(
                     "distributed over {size} ranks (PETSc + MPI): every rank holds the problem, each owns the rows of \
-                     its part of the mesh; rank 0 writes {}/",
+                     its part of the mesh and writes its piece of each frame into {}/; rank 0 the other files",
                     out.display()
                 );
             }
             // In a distributed run rank 0 owns the folder and the terminal; the other ranks
-            // compute the same steps and write nothing.
+            // compute the same steps and write only their pieces of the frames.
             let options = RunOptions {
-                out_dir: root.then(|| out.clone()),
+                out_dir: Some(out.clone()),
                 progress: !quiet && root,
                 log: root,
                 overwrite,
@@ -638,9 +638,10 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             }
             print_summary(&summary);
             println!(
-                "{}; results written to {}/ (solution.pvd, solution_*.vtu, contact_*.csv, summary.json)",
+                "{}; results written to {}/ (solution.pvd, solution_*.{}, contact_*.csv, summary.json)",
                 summary.outcome,
-                out.display()
+                out.display(),
+                if size > 1 { "pvtu and their pieces" } else { "vtu" }
             );
             Ok(())
         }

@@ -1,9 +1,11 @@
 //! `mpirun -n P thermocontact run` (cargo feature `mpi`; docs/distributed.md) against one
 //! process: the same stick/slip state at every step and at every contact node of every output,
-//! the same cutbacks, and fields within the bound the solvers' tolerances give. Also: a
-//! distributed run with the direct path is refused naming `solver.linear`, and a step that
-//! does not converge ends every rank with a non-zero status, the message once and a folder
-//! that says `failed`.
+//! the same cutbacks, and fields within the bound the solvers' tolerances give, in the contact
+//! CSVs and in the frames (each rank's piece, listed by a `.pvtu`, reassembled by the points'
+//! coordinates). Also: a distributed run with the direct path is refused naming
+//! `solver.linear`, and a step that does not converge, or a rank that cannot write its piece of
+//! a frame, ends every rank with a non-zero status, the message once and a folder that says
+//! `failed`.
 //!
 //! **The bound.** Each rank's GMRES stops at ‖b − Ax‖ ≤ 10⁻¹⁰ ‖b‖ as the serial one does, but
 //! with another preconditioner (block Jacobi + ILU(0) over the ranks' parts), so the Newton
@@ -22,8 +24,12 @@ fn skipped_without_the_mpi_feature() {
 
 #[cfg(feature = "mpi")]
 mod distributed {
+    use std::collections::BTreeMap;
     use std::path::{Path, PathBuf};
     use std::process::{Command, Output};
+
+    use vtkio::model::{Attribute, DataSet};
+    use vtkio::Vtk;
 
     const CLI: &str = env!("CARGO_BIN_EXE_thermocontact");
 
@@ -68,10 +74,91 @@ mod distributed {
         (header, rows)
     }
 
+    /// The frames `solution.pvd` lists in `dir`: (time, file).
+    fn collection(dir: &Path) -> Vec<(f64, String)> {
+        let xml = std::fs::read_to_string(dir.join("solution.pvd")).unwrap();
+        let attr = |line: &str, key: &str| -> String {
+            let start = line.find(&format!("{key}=\"")).unwrap() + key.len() + 2;
+            line[start..start + line[start..].find('"').unwrap()].to_string()
+        };
+        (xml.lines().filter(|l| l.trim_start().starts_with("<DataSet ")))
+            .map(|l| (attr(l, "timestep").parse().unwrap(), attr(l, "file")))
+            .collect()
+    }
+
+    /// The point arrays of a frame by name, each a map from the point's coordinates (exact:
+    /// every rank copies the mesh's) to its values, and the frame's cells: a whole `.vtu`, or a
+    /// `.pvtu` with its pieces (a node on the boundary of two parts is in both, with the same
+    /// values).
+    type FramePoints = BTreeMap<String, BTreeMap<[u64; 3], Vec<f64>>>;
+    fn frame_points(path: &Path) -> (FramePoints, usize) {
+        let mut vtk = Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        vtk.load_all_pieces().unwrap();
+        let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+            panic!("{} is not an unstructured grid", path.display())
+        };
+        let (mut arrays, mut cells) = (FramePoints::new(), 0);
+        for piece in &pieces {
+            let piece = piece.load_piece_data(None).unwrap();
+            cells += piece.cells.num_cells();
+            let points: Vec<f64> = piece.points.cast_into().unwrap();
+            for attribute in &piece.data.point {
+                let Attribute::DataArray(array) = attribute else {
+                    continue;
+                };
+                let values: Vec<f64> = array.data.clone().into_vec().unwrap();
+                let m = values.len() / (points.len() / 3);
+                let by_point = arrays.entry(array.name.clone()).or_default();
+                for (x, v) in points.chunks_exact(3).zip(values.chunks_exact(m)) {
+                    let key = [x[0].to_bits(), x[1].to_bits(), x[2].to_bits()];
+                    let before = by_point.insert(key, v.to_vec());
+                    assert!(
+                        before.is_none_or(|b| b == v),
+                        "{}: a node's values differ between pieces",
+                        path.display()
+                    );
+                }
+            }
+        }
+        (arrays, cells)
+    }
+
+    /// The frames of `other` hold those of `one` (the same times, cells and points, every
+    /// point array within [`FIELD_BOUND`] of its largest magnitude), whole or in pieces.
+    fn assert_frames_agree(one: &Path, other: &Path) {
+        let (frames, others) = (collection(one), collection(other));
+        assert_eq!(frames.len(), others.len(), "{}: the same frames", other.display());
+        for ((time, file), (other_time, other_file)) in frames.iter().zip(&others) {
+            assert_eq!(time, other_time);
+            let (a, cells) = frame_points(&one.join(file));
+            let (b, other_cells) = frame_points(&other.join(other_file));
+            assert_eq!(cells, other_cells, "{other_file}: every cell once");
+            assert_eq!(
+                a.keys().collect::<Vec<_>>(),
+                b.keys().collect::<Vec<_>>(),
+                "{other_file}"
+            );
+            for (name, values) in &a {
+                let other_values = &b[name];
+                assert_eq!(values.len(), other_values.len(), "{other_file} {name}: every point");
+                let scale = (values.values().flatten()).fold(f64::MIN_POSITIVE, |m, v| m.max(v.abs()));
+                for (point, v) in values {
+                    let w = &other_values[point];
+                    let worst = v.iter().zip(w).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                    assert!(
+                        worst <= FIELD_BOUND * scale,
+                        "{other_file} {name}: {worst:e} apart at a point, bound {FIELD_BOUND:e} × {scale:e}"
+                    );
+                }
+            }
+        }
+    }
+
     /// The runs in `one` and `other` agree: steps.csv's slip, stick, substeps and cutback depth
     /// at every step, every contact CSV's slip flag at every node, its fields within
-    /// [`FIELD_BOUND`] of their largest magnitude.
+    /// [`FIELD_BOUND`] of their largest magnitude; their frames ([`assert_frames_agree`]).
     fn assert_runs_agree(one: &Path, other: &Path) {
+        assert_frames_agree(one, other);
         let (header, a) = read_csv(&one.join("steps.csv"));
         let (_, b) = read_csv(&other.join("steps.csv"));
         assert_eq!(a.len(), b.len(), "the same steps");
@@ -125,6 +212,10 @@ mod distributed {
                 text(&output).contains(&format!("distributed over {ranks} ranks")),
                 "{ranks} ranks: the run says so:\n{}",
                 text(&output)
+            );
+            assert!(
+                collection(&out).iter().all(|(_, file)| file.ends_with(".pvtu")),
+                "{ranks} ranks: the frames in pieces"
             );
             assert_runs_agree(&one, &out);
         }
@@ -230,6 +321,61 @@ mod distributed {
         assert_eq!(said.matches("did not converge").count(), 1, "the error once:\n{said}");
         let summary = std::fs::read_to_string(dir.join("failed").join("summary.json")).unwrap();
         assert!(summary.contains("\"failed\""), "{summary}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A rank that cannot write its piece of a frame (rank 1 given a folder under a file,
+    /// through mpirun's one command per rank) ends every rank after that step: a non-zero
+    /// status, rank 1's error once, and rank 0's folder says `failed` and lists no frame of
+    /// that step in pieces.
+    #[test]
+    fn a_rank_that_cannot_write_its_piece_ends_every_rank() {
+        let dir = std::env::temp_dir().join(format!("thermocontact-distributed-io-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("a-file"), "").unwrap();
+        let args = scenario_with(
+            "paper3d.toml",
+            &[
+                "mesh.nx=12",
+                "mesh.ny=3",
+                "mesh.nz=3",
+                "time.steps=4",
+                "time.final_time=0.0625",
+                "output.times=[0.03125,0.0625]",
+                "solver.linear=\"iterative\"",
+            ],
+        );
+        let (folder, unwritable) = (dir.join("out"), dir.join("a-file").join("out"));
+        let mut command = Command::new("timeout");
+        command.args(["300", "mpirun", "--allow-run-as-root", "--oversubscribe"]);
+        for (rank, out) in [&folder, &unwritable].iter().enumerate() {
+            if rank > 0 {
+                command.arg(":");
+            }
+            command
+                .args(["-n", "1", CLI, "run"])
+                .args(&args)
+                .arg("--out")
+                .arg(out)
+                .arg("--quiet");
+        }
+        let output = command.output().unwrap();
+        let said = text(&output);
+        assert!(!output.status.success(), "{said}");
+        assert!(!said.contains("timeout"), "no hang:\n{said}");
+        assert_eq!(
+            said.matches("error: rank 1: cannot write").count(),
+            1,
+            "the error once:\n{said}"
+        );
+        let summary = std::fs::read_to_string(folder.join("summary.json")).unwrap();
+        assert!(summary.contains("\"failed\""), "{summary}");
+        assert!(
+            collection(&folder).iter().all(|(_, file)| !file.ends_with(".pvtu")),
+            "no frame in pieces listed: {:?}",
+            collection(&folder)
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use super::recorder::Recorder;
-use super::snapshot::{record, write_snapshot};
+use super::snapshot::{record, write_snapshot, Layout, Written};
 use super::summary::{FailureRecord, OutputRecord, RunStatus, StepRecord, Summary, Tally};
 use super::{OutputPlan, RunOptions, CHECKPOINT_FILE};
 use crate::error::Error;
@@ -89,10 +89,13 @@ impl<'a> Files<'a> {
         Ok(())
     }
 
-    /// The frame of `state` (and its `.pvd` entry, the collection rewritten).
+    /// The frame of `state`, whole (and its `.pvd` entry, the collection rewritten). Rank 0 of
+    /// a distributed run writes it so too: every rank holds the whole state, and this frame
+    /// (a stopped run's last state) is written where the ranks no longer agree on anything.
     fn frame(&self, state: &State, record: &OutputRecord, tally: &mut Tally) -> Result<(), Error> {
-        write_snapshot(self.problem, self.plan, state, record, self.dir(), &mut tally.frames)?;
-        if self.plan.vtk {
+        let written = write_snapshot(self.problem, self.plan, state, record, self.dir(), &Layout::Whole)?;
+        if let Some(Written::Whole(entry)) = written {
+            tally.frames.push(entry);
             output::write_pvd(&self.dir().join("solution.pvd"), &tally.frames)?;
         }
         Ok(())

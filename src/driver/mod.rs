@@ -40,7 +40,9 @@
 mod checkpoints;
 mod files;
 mod frames;
+mod listing;
 mod progress;
+mod ranks;
 mod recorder;
 mod setup;
 mod snapshot;
@@ -63,6 +65,7 @@ use checkpoints::Checkpoints;
 use files::Files;
 use frames::Frames;
 use progress::Progress;
+use ranks::Ranks;
 use recorder::Recorder;
 use stop::Stop;
 
@@ -77,7 +80,9 @@ pub use watch::{RunWarning, BALANCE_TOLERANCE, HEAT_BALANCE_TOLERANCE};
 /// How to run.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
-    /// Where to write results; `None` writes nothing.
+    /// Where to write results; `None` writes nothing. In a distributed run
+    /// ([`crate::step::KrylovParams::distributed`]) every rank is given the folder: rank 0
+    /// claims it and writes its files, and every rank writes its piece of each frame there.
     pub out_dir: Option<PathBuf>,
     /// Draw a progress bar on stderr (a log line now and then where stderr is not a terminal).
     pub progress: bool,
@@ -187,9 +192,18 @@ pub fn run_observed(
 ) -> Result<Run, Error> {
     let started = Instant::now();
     let (first, tally) = setup::start(problem, plan, options.restart.as_ref())?;
-    // Claim the folder before the expensive set-up: a refused folder fails at once.
-    let files = Files::claim(problem, plan, options, &tally)?;
-    let (levels, timings) = setup::levels(problem, params)?;
+    let ranks = Ranks::of(params)?;
+    // Claim the folder before the expensive set-up: a refused folder fails at once. In a
+    // distributed run rank 0 claims it.
+    let files = match ranks {
+        Some(ranks) if !ranks.is_root() => None,
+        _ => Files::claim(problem, plan, options, &tally)?,
+    };
+    // Collective in a distributed run (the partition), so that no rank writes into the folder
+    // before rank 0 has claimed it.
+    let (layout, layout_seconds) = setup::layout(problem, ranks, options.out_dir.is_some())?;
+    let (levels, mut timings) = setup::levels(problem, params)?;
+    timings.factorization += layout_seconds;
     let mut recorder = Recorder::new(problem, params, plan, &levels, tally, timings, started);
     if options.log {
         recorder.header_lines().iter().for_each(|line| println!("{line}"));
@@ -203,7 +217,8 @@ pub fn run_observed(
     std::thread::scope(|scope| {
         let files = files.as_ref();
         let frames = &recorder.tally.frames;
-        let mut frames = Frames::start(scope, problem, plan, files, frames, options.inline_frames);
+        let out = options.out_dir.as_deref().map(|dir| (dir, &layout));
+        let mut frames = Frames::start(scope, problem, plan, files, out, frames, options.inline_frames);
         frames.initial(&first, &mut recorder.tally)?;
         let mut observers = Observers {
             recorder,

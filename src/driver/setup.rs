@@ -1,9 +1,12 @@
-//! Setting a run up: the state it starts from (fresh, or a checkpoint's with its tally) and the
-//! solver (the step matrix factored or preconditioned, the step solver set up on it).
+//! Setting a run up: the state it starts from (fresh, or a checkpoint's with its tally), the
+//! layout of its frames (whole, or a rank's piece) and the solver (the step matrix factored or
+//! preconditioned, the step solver set up on it).
 
 use std::time::Instant;
 
 use super::files::identity;
+use super::ranks::Ranks;
+use super::snapshot::Layout;
 use super::summary::{Tally, Timings};
 use super::{OutputPlan, Restart};
 use crate::error::Error;
@@ -49,4 +52,25 @@ pub(super) fn levels<'p>(problem: &'p Problem, params: &SolverParams) -> Result<
         ..Timings::default()
     };
     Ok((levels, timings))
+}
+
+/// How this process writes its frames (with the seconds it took): whole (one process, or no
+/// folder), or, as rank r of a distributed run with a folder, the piece of the cells of its
+/// part of the run's partition ([`Ranks::own_cells`]: computed here, collective).
+pub(super) fn layout(problem: &Problem, ranks: Option<Ranks>, folder: bool) -> Result<(Layout, f64), Error> {
+    let Some(ranks) = ranks.filter(|_| folder) else {
+        return Ok((Layout::Whole, 0.0));
+    };
+    let clock = Instant::now();
+    let grid = crate::output::Grid {
+        dim: problem.dim(),
+        points: &problem.mesh.coords,
+        cells: &problem.mesh.cells,
+    };
+    let layout = Layout::Piece {
+        rank: ranks.rank,
+        n_ranks: ranks.size,
+        piece: crate::output::GridPiece::new(&grid, ranks.own_cells(problem)?),
+    };
+    Ok((layout, clock.elapsed().as_secs_f64()))
 }

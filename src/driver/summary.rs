@@ -41,7 +41,8 @@ pub struct Timings {
     /// before a checkpoint, and at the end.
     pub output: f64,
     /// The frames' own time (fields, encoding, files), on the writer thread in parallel with the
-    /// time loop (in `output` where the run writes them inline, `RunOptions::inline_frames`).
+    /// time loop (in `output` where the run writes them inline, `RunOptions::inline_frames`);
+    /// in a distributed run, the slowest rank's, each writing its pieces.
     pub frames: f64,
     /// Everything.
     pub total: f64,

@@ -20,6 +20,11 @@
 //!
 //! `inline` writes each frame on the loop's thread at once instead (no thread), through the
 //! same code: the files are the same bytes either way (`tests/run_folder.rs` checks it).
+//!
+//! **In pieces** (a rank of a distributed run, [`Layout::Piece`]) the writer writes this rank's
+//! piece of each frame and does not touch `solution.pvd`: the frames it has written wait in
+//! [`FrameWriter::take_written`] until every rank has written its own (module `listing`, the
+//! ranks' agreement), and rank 0 then lists them.
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -27,7 +32,7 @@ use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
 
-use super::snapshot::write_snapshot;
+use super::snapshot::{write_snapshot, Layout, Written};
 use super::summary::{OutputRecord, Tally};
 use super::OutputPlan;
 use crate::error::Error;
@@ -43,20 +48,21 @@ struct FrameFiles<'a> {
     problem: &'a Problem,
     plan: &'a OutputPlan,
     dir: PathBuf,
-    /// The frames written, as `solution.pvd` lists them.
+    layout: &'a Layout,
+    /// The frames written whole, as `solution.pvd` lists them.
     frames: Vec<PvdEntry>,
 }
 
 impl FrameFiles<'_> {
-    /// Writes the frame of `state`; its `.pvd` entry (none without `.vtu` files), the
-    /// collection rewritten.
-    fn write(&mut self, state: &State, record: &OutputRecord) -> Result<Option<PvdEntry>, Error> {
-        let before = self.frames.len();
-        write_snapshot(self.problem, self.plan, state, record, &self.dir, &mut self.frames)?;
-        if self.plan.vtk {
+    /// Writes the frame of `state`; its `.vtu` (none without `.vtu` files), the collection
+    /// rewritten where the frame is whole.
+    fn write(&mut self, state: &State, record: &OutputRecord) -> Result<Option<Written>, Error> {
+        let written = write_snapshot(self.problem, self.plan, state, record, &self.dir, self.layout)?;
+        if let Some(Written::Whole(entry)) = &written {
+            self.frames.push(entry.clone());
             output::write_pvd(&self.dir.join("solution.pvd"), &self.frames)?;
         }
-        Ok(self.frames.get(before).cloned())
+        Ok(written)
     }
 }
 
@@ -68,7 +74,7 @@ struct Job {
 
 /// The writer's report on one frame.
 struct Done {
-    outcome: Result<Option<PvdEntry>, Error>,
+    outcome: Result<Option<Written>, Error>,
     seconds: f64,
 }
 
@@ -89,6 +95,8 @@ pub struct FrameWriter<'scope, 'env> {
     pending: VecDeque<usize>,
     /// Seconds spent on the frames reported (on the writer's thread, or inline).
     seconds: f64,
+    /// In pieces: the frames written and not yet taken, in order (none without `.vtu` files).
+    written: Option<VecDeque<Option<Written>>>,
 }
 
 impl<'scope, 'env> FrameWriter<'scope, 'env> {
@@ -97,7 +105,7 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
         scope: &'scope Scope<'scope, 'env>,
         problem: &'env Problem,
         plan: &'env OutputPlan,
-        dir: &Path,
+        (dir, layout): (&Path, &'env Layout),
         frames: Vec<PvdEntry>,
         inline: bool,
     ) -> Self {
@@ -105,6 +113,7 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
             problem,
             plan,
             dir: dir.to_path_buf(),
+            layout,
             frames,
         };
         let mode = if inline {
@@ -142,6 +151,7 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
             mode,
             pending: VecDeque::new(),
             seconds: 0.0,
+            written: matches!(layout, Layout::Piece { .. }).then(VecDeque::new),
         }
     }
 
@@ -175,7 +185,7 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
     }
 
     /// Takes the writer's reports so far without waiting: the frames written go to
-    /// `tally.frames`; the first error comes back.
+    /// `tally.frames` (in pieces: to [`FrameWriter::take_written`]); the first error comes back.
     pub fn poll(&mut self, tally: &mut Tally) -> Result<(), Error> {
         while !self.pending.is_empty() {
             let Mode::Thread { done, .. } = &self.mode else { break };
@@ -221,16 +231,34 @@ impl<'scope, 'env> FrameWriter<'scope, 'env> {
         (self.seconds, flushed)
     }
 
+    /// In pieces: the frames written since the last call, oldest first, up to `count` (those
+    /// written so far: [`FrameWriter::n_written`]).
+    pub fn take_written(&mut self, count: usize) -> Vec<Option<Written>> {
+        let pieces = self.written.as_mut().expect("a writer in pieces");
+        pieces.drain(..count).collect()
+    }
+
+    /// In pieces: the frames written and not yet taken.
+    pub fn n_written(&self) -> usize {
+        self.written.as_ref().map_or(0, VecDeque::len)
+    }
+
     /// The report on the oldest pending frame.
     fn report(&mut self, report: Done, tally: &mut Tally) -> Result<(), Error> {
         self.seconds += report.seconds;
         let n = self.pending.pop_front().expect("a report answers a frame sent");
-        match report.outcome {
-            Ok(entry) => {
-                tally.frames.extend(entry);
+        match (report.outcome, &mut self.written) {
+            (Ok(written), Some(pieces)) => {
+                pieces.push_back(written);
                 Ok(())
             }
-            Err(error) => {
+            (Ok(written), None) => {
+                if let Some(Written::Whole(entry)) = written {
+                    tally.frames.push(entry);
+                }
+                Ok(())
+            }
+            (Err(error), _) => {
                 // This frame is not on disk (its CSV may be), nor are those queued behind it,
                 // which the writer drops: the run keeps no record of them, as where the loop
                 // stopped at the frame itself.

@@ -188,6 +188,10 @@ pub struct Problem {
     pub extra_loads: Option<Box<dyn ExtraLoads>>,
     /// Wall time the builder took, in seconds (reported as the run's assembly time).
     pub build_seconds: f64,
+    /// The mesh's partition over the ranks of a distributed run, once computed
+    /// ([`Problem::partition`]).
+    #[cfg(feature = "mpi")]
+    partition: std::sync::OnceLock<crate::partition::MeshPartition>,
 }
 
 /// Loads that vary in space and time given as code, added to the data loads: a body force
@@ -681,11 +685,34 @@ impl ProblemBuilder {
             initial,
             extra_loads: self.extra_loads,
             build_seconds: clock.elapsed().as_secs_f64(),
+            #[cfg(feature = "mpi")]
+            partition: std::sync::OnceLock::new(),
         })
     }
 }
 
 impl Problem {
+    /// The mesh's partition over the ranks of `comm` ([`MeshPartition::on_root`]: PT-Scotch on
+    /// rank 0, broadcast), computed on the first call and kept: the solver's layout of the
+    /// unknowns ([`crate::step`]'s distributed Krylov solves, at each step size) and the
+    /// frames' pieces (`driver`) share one partition, computed once per run. The first call is
+    /// collective: every rank makes it at the same point. (PT-Scotch's split differs from call
+    /// to call, and costs 4.4 s at 10⁶ unknowns: docs/distributed.md.)
+    ///
+    /// [`MeshPartition::on_root`]: crate::partition::MeshPartition::on_root
+    #[cfg(feature = "mpi")]
+    pub fn partition(
+        &self,
+        comm: &crate::la::mpi::Communicator,
+    ) -> Result<&crate::partition::MeshPartition, crate::la::LaError> {
+        if let Some(partition) = self.partition.get() {
+            assert_eq!(partition.n_parts, comm.size(), "a partition into one part per rank");
+            return Ok(partition);
+        }
+        let partition = crate::partition::MeshPartition::on_root(comm, &self.mesh)?;
+        Ok(self.partition.get_or_init(|| partition))
+    }
+
     /// Space dimension d.
     pub fn dim(&self) -> usize {
         self.mesh.dim

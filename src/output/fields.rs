@@ -19,10 +19,16 @@ pub const STRESS_COMPONENTS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 
 /// σ per cell, 6 components in the order of [`STRESS_COMPONENTS`] (P1 strains are constant
 /// per cell; θ is averaged over the cell's vertices).
 pub fn cell_stress(problem: &Problem, state: &State) -> Vec<f64> {
+    cell_stress_of(problem, state, 0..problem.mesh.n_cells())
+}
+
+/// σ of [`cell_stress`] on `cells` only, in their order (the piece of a distributed run's
+/// frame).
+pub fn cell_stress_of(problem: &Problem, state: &State, cells: impl ExactSizeIterator<Item = usize>) -> Vec<f64> {
     let mesh = &problem.mesh;
     let d = mesh.dim;
-    let mut out = Vec::with_capacity(mesh.n_cells() * STRESS_COMPONENTS.len());
-    for e in 0..mesh.n_cells() {
+    let mut out = Vec::with_capacity(cells.len() * STRESS_COMPONENTS.len());
+    for e in cells {
         let material = problem.materials.of(e);
         let t = Simplex::new(d, &mesh.cell_coords(e));
         let nodes = mesh.cell(e);

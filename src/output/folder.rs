@@ -255,16 +255,24 @@ fn is_temporary(name: &str) -> bool {
         .is_some_and(|(target, _)| is_run_file(target))
 }
 
-/// The time level of a frame file (`solution_0016.vtu`, `contact_0016.csv`).
+/// The time level of a frame file (`solution_0016.vtu`, `contact_0016.csv`; a distributed
+/// run's `solution_0016.pvtu` and its pieces `solution_0016_p1.vtu`).
 pub fn frame_step(name: &str) -> Option<usize> {
-    let digits = name
-        .strip_prefix("solution_")
-        .and_then(|rest| rest.strip_suffix(".vtu"))
-        .or_else(|| name.strip_prefix("contact_").and_then(|rest| rest.strip_suffix(".csv")))?;
-    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
+    fn number(s: &str) -> Option<&str> {
+        (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit())).then_some(s)
     }
-    digits.parse().ok()
+    let digits = if let Some(rest) = name.strip_prefix("solution_") {
+        match rest.strip_suffix(".vtu") {
+            Some(stem) => match stem.split_once("_p") {
+                Some((digits, rank)) => number(rank).and(Some(digits)),
+                None => Some(stem),
+            },
+            None => rest.strip_suffix(".pvtu"),
+        }
+    } else {
+        name.strip_prefix("contact_").and_then(|rest| rest.strip_suffix(".csv"))
+    };
+    number(digits?)?.parse().ok()
 }
 
 /// "summary.json, solution.pvd, 8 frame files" for a message.
@@ -301,6 +309,11 @@ mod tests {
         assert_eq!(frame_step("contact_12345.csv"), Some(12345));
         assert_eq!(frame_step("solution_.vtu"), None);
         assert_eq!(frame_step("solution_12a.vtu"), None);
+        assert_eq!(frame_step("solution_0016.pvtu"), Some(16));
+        assert_eq!(frame_step("solution_0016_p12.vtu"), Some(16));
+        assert_eq!(frame_step("solution_0016_p.vtu"), None);
+        assert_eq!(frame_step("solution_0016_q1.vtu"), None);
+        assert!(is_run_file(".solution_0001_p1.vtu.tmp-77-3"));
         assert!(is_run_file(".solution_0001.vtu.tmp-77-3"));
         assert!(is_run_file("summary.json"));
         assert!(!is_run_file("notes.txt"));

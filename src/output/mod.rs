@@ -1,5 +1,6 @@
-//! Output layer: VTK XML unstructured grids (`.vtu`) plus PVD collections for
-//! ParaView time series, CSV tables, and raw bytes (e.g. serialized JSON); the run folder and
+//! Output layer: VTK XML unstructured grids (`.vtu`), in pieces listed by a `.pvtu` where
+//! several processes write a frame ([`GridPiece`]), plus PVD collections for ParaView time
+//! series, CSV tables, and raw bytes (e.g. serialized JSON); the run folder and
 //! its lock ([`folder`]), checkpoints ([`checkpoint`]), the fields of a state ([`fields`]) and
 //! the figures ([`figures`]).
 //!
@@ -20,10 +21,12 @@ pub mod fields;
 pub mod figures;
 pub mod folder;
 mod plot;
+mod pvtu;
 mod vtk;
 
 pub use atomic::{write_atomic, write_atomic_with};
 pub use csv::{csv_bytes, write_csv};
+pub use pvtu::{pvtu_bytes, write_pvtu, GridPiece};
 pub use vtk::{vtu_bytes, write_pvd, write_vtu, Compression, Field, Grid, PvdEntry};
 
 /// Errors of the output layer.
@@ -39,6 +42,10 @@ pub enum OutputError {
         expected: usize,
         found: usize,
     },
+    /// An output error of another rank of a distributed run, as that rank reported it: every
+    /// rank ends with it (`driver`'s agreement over the ranks).
+    #[error("rank {rank}: {message}")]
+    OnRank { rank: usize, message: String },
 }
 
 impl OutputError {

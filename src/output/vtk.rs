@@ -136,6 +136,16 @@ pub fn vtu_bytes(
     Ok(bytes)
 }
 
+/// The components a field is written with: those it has, but 3 for a 2D vector (padded with
+/// z = 0, [`vtu_bytes`]).
+pub(super) fn written_components(dim: usize, f: &Field) -> usize {
+    if dim == 2 && f.n_components == 2 {
+        3
+    } else {
+        f.n_components
+    }
+}
+
 /// A field as a vtkio data array, 2D vectors padded to three components.
 fn attribute(dim: usize, f: &Field) -> Attribute {
     let (elem, data) = if dim == 2 && f.n_components == 2 {
@@ -234,7 +244,7 @@ fn check_field(f: &Field, n_entities: usize) -> Result<(), OutputError> {
     Ok(())
 }
 
-fn xml_escape(s: &str) -> String {
+pub(super) fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

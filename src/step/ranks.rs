@@ -6,13 +6,15 @@
 //! Γ_C: 8 bytes per unknown each). Each linearization changes Ã's Γ_C rows in place on every
 //! rank, the same way from the same iterate. The Krylov solve, which is where a step spends its
 //! time, runs on PETSc: rank r owns the rows of Ã at the unknowns of its part of the mesh
-//! ([`MeshPartition`]: PT-Scotch on the dual graph, computed on rank 0 and broadcast;
+//! ([`MeshPartition`](crate::partition::MeshPartition): PT-Scotch on the dual graph, computed
+//! on rank 0 and broadcast once per run, shared with the frames' pieces: [`Problem::partition`];
 //! [`DofLayout`]: each rank's unknowns consecutive), hands them to PETSc's MPIAIJ matrix as
 //! CSR rows at set-up ([`DistributedMatrix::from_rows`]) and, after each linearization, only
-//! the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs with block Jacobi (one block per rank) or GAMG, from the
-//! previous iterate as the serial solves do. Each rank's unknowns are numbered in the system's
-//! order, so its block has its Γ_C rows last and its ILU(0) is the serial path's: single
-//! precision, refactored only from the first row a linearization changes ([`RankBlock`]). The solution is gathered on every rank
+//! the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs with block Jacobi (one
+//! block per rank) or GAMG, from the previous iterate as the serial solves do. Each rank's
+//! unknowns are numbered in the system's order, so its block has its Γ_C rows last and its
+//! ILU(0) is the serial path's: single precision, refactored only from the first row a
+//! linearization changes ([`RankBlock`]). The solution is gathered on every rank
 //! (PETSc's scatter to all), so that the nodal law, the stop tests, the slip counts and the
 //! cutback decision are computed from the same numbers on every rank and agree without a
 //! reduction: the ranks take the same branches by construction.
@@ -32,7 +34,7 @@
 use crate::la::mpi::{Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
 use crate::la::{CsrMatrix, Ilu0, LaError, Preconditioner, SolveInfo};
 use crate::model::{node_unknowns, Problem};
-use crate::partition::{DofLayout, MeshPartition};
+use crate::partition::DofLayout;
 
 /// The Krylov solver of Ã x = b̃ over the ranks: Ã's rows that this rank owns in PETSc's
 /// matrix, the maps between the serial system's order and PETSc's layout, and the
@@ -127,17 +129,17 @@ impl RankBlock {
 }
 
 impl RankKrylov {
-    /// Partitions the mesh (on rank 0), lays the unknowns out and sets PETSc's matrix up with
-    /// this rank's rows of `a` (the system's rows, row i the unknown `order[i]`, the rows from
-    /// `first_changing` on those a linearization changes); collective.
+    /// Lays the unknowns out over the run's partition of the mesh ([`Problem::partition`]) and
+    /// sets PETSc's matrix up with this rank's rows of `a` (the system's rows, row i the unknown
+    /// `order[i]`, the rows from `first_changing` on those a linearization changes); collective.
     pub(crate) fn new(
         problem: &Problem,
         (a, order, first_changing): (&CsrMatrix, &[usize], usize),
         params: DistributedKrylov,
     ) -> Result<Self, LaError> {
         let comm = Communicator::world()?;
-        let partition = MeshPartition::on_root(&comm, &problem.mesh)?;
-        let layout = DofLayout::new(&partition, order.len(), |p, out| node_unknowns(problem, p, out));
+        let partition = problem.partition(&comm)?;
+        let layout = DofLayout::new(partition, order.len(), |p, out| node_unknowns(problem, p, out));
         // Each rank's unknowns as the layout gives them, numbered in the system's order.
         let mut row_of_unknown = vec![0; order.len()];
         order.iter().enumerate().for_each(|(row, &u)| row_of_unknown[u] = row);
