@@ -443,14 +443,25 @@ impl DistributedMatrix {
                 &mut raw,
             )
         };
+        Self::created(OPERATION, (code, raw), first..first + n_owned, n_global, rows.len())
+    }
+
+    /// The matrix the C layer created (`code` 0 and `raw` set), or the error of `operation`.
+    fn created(
+        operation: &'static str,
+        (code, raw): (c_int, *mut RawDist),
+        owned: Range<usize>,
+        n_global: usize,
+        n_coo: usize,
+    ) -> Result<Self, Error> {
         let handle = NonNull::new(raw)
             .filter(|_| code == 0)
-            .ok_or_else(|| failed(OPERATION, code))?;
+            .ok_or_else(|| failed(operation, code))?;
         Ok(DistributedMatrix {
             handle,
-            owned: first..first + n_owned,
+            owned,
             n_global,
-            n_coo: rows.len(),
+            n_coo,
             krylov: None,
         })
     }
@@ -499,16 +510,7 @@ impl DistributedMatrix {
                 &mut raw,
             )
         };
-        let handle = NonNull::new(raw)
-            .filter(|_| code == 0)
-            .ok_or_else(|| failed(OPERATION, code))?;
-        Ok(DistributedMatrix {
-            handle,
-            owned: first..first + n_owned,
-            n_global,
-            n_coo: 0,
-            krylov: None,
-        })
+        Self::created(OPERATION, (code, raw), first..first + n_owned, n_global, 0)
     }
 
     /// The rows this rank owns.
