@@ -196,7 +196,7 @@ mod distributed {
                 .into_iter()
                 .flatten()
             {
-                cols.push(j);
+                cols.push(j as u32);
                 values.push(if i == j { 2.0 / h } else { -1.0 / h });
             }
             ptr.push(cols.len());

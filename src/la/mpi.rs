@@ -471,8 +471,9 @@ impl DistributedMatrix {
     /// row) and `values`. Its pattern is fixed: values change by [`DistributedMatrix::set_rows`]
     /// (there are no COO pairs for [`DistributedMatrix::set_values`]). Preallocated in time
     /// linear in the entries (PETSc's CSR preallocation), where the COO one sorts the pairs:
-    /// at 972k unknowns on 2 ranks, 14–17 s of the set-up's 36–40 s (machine loaded).
-    pub fn from_rows(comm: &Communicator, ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<Self, Error> {
+    /// at 972k unknowns on 2 ranks, 14–17 s of the set-up's 36–40 s (machine loaded). The
+    /// columns are 32-bit, as PETSc's indices are: handed over without a copy.
+    pub fn from_rows(comm: &Communicator, ptr: &[usize], cols: &[u32], values: &[f64]) -> Result<Self, Error> {
         const OPERATION: &str = "MatMPIAIJSetPreallocationCSR";
         let n_owned = ptr.len().checked_sub(1).expect("n_owned + 1 offsets");
         assert!(ptr[0] == 0 && ptr[n_owned] == cols.len() && cols.len() == values.len());
@@ -483,7 +484,9 @@ impl DistributedMatrix {
         let first: usize = counts[..comm.rank()].iter().sum();
         if let Some(r) = (0..n_owned).find(|&r| {
             let row = &cols[ptr[r]..ptr[r + 1]];
-            ptr[r] > ptr[r + 1] || row.windows(2).any(|w| w[0] >= w[1]) || row.last().is_some_and(|&c| c >= n_global)
+            ptr[r] > ptr[r + 1]
+                || row.windows(2).any(|w| w[0] >= w[1])
+                || row.last().is_some_and(|&c| c as usize >= n_global)
         }) {
             return Err(Error::Petsc {
                 operation: OPERATION,
@@ -495,17 +498,18 @@ impl DistributedMatrix {
             });
         }
         index32(OPERATION, cols.len())?;
+        let (n_owned32, n_global32) = (index32(OPERATION, n_owned)?, index32(OPERATION, n_global)?);
         let ptr64: Vec<c_longlong> = ptr.iter().map(|&p| p as c_longlong).collect();
-        let cols32: Vec<c_int> = cols.iter().map(|&j| j as c_int).collect();
         let mut raw = std::ptr::null_mut();
         let _petsc = petsc_lock();
-        // SAFETY: checked CSR arrays of n_owned rows; `raw` is written on success.
+        // SAFETY: checked CSR arrays of n_owned rows, every column below n_global ≤ c_int::MAX,
+        // so the u32 columns read as c_int are the same numbers; `raw` is written on success.
         let code = unsafe {
             tc_dist_create_csr(
-                index32(OPERATION, n_owned)?,
-                index32(OPERATION, n_global)?,
+                n_owned32,
+                n_global32,
                 ptr64.as_ptr(),
-                cols32.as_ptr(),
+                cols.as_ptr().cast::<c_int>(),
                 values.as_ptr(),
                 &mut raw,
             )

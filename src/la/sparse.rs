@@ -304,6 +304,22 @@ impl CsrMatrix {
         self.ptr[i] - self.ptr[first]..self.ptr[i + 1] - self.ptr[first]
     }
 
+    /// The same matrix with rows `0..first` emptied: rows `first..n` kept as they are, with
+    /// their columns (a rank of a distributed run keeps only the rows each linearization
+    /// changes once PETSc and its block have the others: `step::ranks`).
+    pub fn keep_rows_from(self, first: usize) -> Self {
+        let start = self.ptr[first];
+        let ptr = (self.ptr.iter().enumerate())
+            .map(|(i, &p)| if i <= first { 0 } else { p - start })
+            .collect();
+        CsrMatrix {
+            n: self.n,
+            ptr,
+            col: self.col[start..].to_vec(),
+            val: self.val[start..].to_vec(),
+        }
+    }
+
     /// Stored entries.
     pub fn nnz(&self) -> usize {
         self.val.len()
@@ -361,6 +377,21 @@ pub(crate) fn sparse_dot32<V: Copy + Into<f64>>(cols: &[u32], vals: &[V], x: &[f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rows kept from `first` on are the rows they were, their values where
+    /// [`CsrMatrix::values_from`] finds them; the rows before are empty.
+    #[test]
+    fn kept_rows_are_the_rows_and_the_others_are_empty() {
+        let a = CsrMatrix::from_rows(3, vec![0, 2, 3, 5], vec![0, 2, 1, 0, 2], vec![1.0, 2.0, 3.0, 4.0, 5.0]);
+        let kept = a.clone().keep_rows_from(1);
+        assert_eq!(kept.row(0), (&[][..], &[][..]));
+        for i in 1..3 {
+            assert_eq!(kept.row(i), a.row(i));
+            assert_eq!(kept.offset_from(1, i), a.offset_from(1, i));
+        }
+        assert_eq!(kept.values_from(1), a.values_from(1));
+        assert_eq!(kept.nnz(), 3);
+    }
 
     #[test]
     fn triplets_sum_duplicates_and_multiply() {

@@ -43,7 +43,7 @@ pub use pressure::ContactPressure;
 pub use problem::*;
 pub use state::State;
 pub use step_matrix::{
-    assemble_by_columns, ordered_rows, ordered_rows_range, rows_of_symmetric_form, rows_of_symmetric_form_ordered,
-    StepMatrix, StepRhs,
+    assemble_by_columns, ordered_rows, ordered_rows_at, ordered_rows_range, rows_of_symmetric_form,
+    rows_of_symmetric_form_ordered, StepMatrix, StepRhs,
 };
 pub use thermal::{ThermalBoundary, ThermalCondition};

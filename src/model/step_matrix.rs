@@ -139,6 +139,23 @@ fn ordered_rows_in_blocks(problem: &Problem, k: f64, order: &[usize], rows_per_b
     (CsrMatrix::from_rows(order.len(), ptr, col, val), source.rhs())
 }
 
+/// [`ordered_rows`] with only the rows `rows` (ascending) assembled, the others empty: the same
+/// bits in those rows. A rank of a distributed run keeps only its own rows and the Γ_C rows
+/// (`step::ranks`).
+pub fn ordered_rows_at(problem: &Problem, k: f64, order: &[usize], rows: &[usize]) -> (CsrMatrix, StepRhs) {
+    debug_assert!(rows.windows(2).all(|w| w[0] < w[1]) && rows.last().is_none_or(|&r| r < order.len()));
+    let source = ColumnSource::new(problem, k, order);
+    let unknowns: Vec<usize> = rows.iter().map(|&r| order[r]).collect();
+    let (of_rows, col, val) = rows_in_blocks(&source, &unknowns, ROWS_PER_BLOCK);
+    drop(unknowns);
+    let mut ptr = vec![0; order.len() + 1];
+    rows.iter()
+        .zip(of_rows.windows(2))
+        .for_each(|(&r, p)| ptr[r + 1] = p[1] - p[0]);
+    (1..ptr.len()).for_each(|i| ptr[i] += ptr[i - 1]);
+    (CsrMatrix::from_rows(order.len(), ptr, col, val), source.rhs())
+}
+
 /// Rows `rows` of P A Pᵀ (row and column i are unknown `order[i]`), as row pointers (from 0),
 /// columns and values: [`ordered_rows`]'s rows, the same bits, for the rows a rank owns in a
 /// distributed run (`crate::model::DistributedStepMatrix`).
@@ -747,6 +764,26 @@ mod tests {
                         .map(|&v| bits(v))
                         .eq(column.iter().map(|&(_, v)| bits(sign * v))));
                 }
+            }
+        }
+    }
+
+    /// The rows assembled alone are [`ordered_rows`]'s, bit for bit; the others are empty.
+    #[test]
+    fn rows_assembled_alone_are_the_rows_of_the_whole() {
+        let problem = crate::model::samples::paper_3d([4, 2, 2], 64).unwrap();
+        let k = problem.time_step();
+        let n = problem.velocity.n_free + problem.temperature.n_free;
+        let order: Vec<usize> = (0..n).map(|i| (i * 7919) % n).collect();
+        let (whole, _) = ordered_rows(&problem, k, &order);
+        let rows: Vec<usize> = (0..n).filter(|r| r % 3 != 1).collect();
+        let (some, _) = ordered_rows_at(&problem, k, &order, &rows);
+        for i in 0..n {
+            let bits = |(c, v): (&[u32], &[f64])| (c.to_vec(), v.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+            if i % 3 == 1 {
+                assert!(some.row(i).0.is_empty(), "row {i}");
+            } else {
+                assert_eq!(bits(some.row(i)), bits(whole.row(i)), "row {i}");
             }
         }
     }

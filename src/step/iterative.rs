@@ -159,18 +159,21 @@ fn ilu_needs_amg(
     }
 }
 
-/// The Krylov solver over the ranks of a distributed run (Ã, its order and its first Γ_C row),
-/// its preconditioner from `params.preconditioner`: block Jacobi with each rank's block's
-/// ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for `auto` the serial rule's probe with block
-/// Jacobi (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
+/// The step matrix of step size k on this rank of a distributed run and its Krylov solver over
+/// the ranks: Ã's rows this rank owns handed to PETSc, and of Ã itself only the rows from
+/// `first_contact` on kept (those each linearization changes, on every rank), the rows before
+/// left empty; the preconditioner from `params.preconditioner`: block Jacobi with each rank's
+/// block's ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for `auto` the serial rule's probe
+/// with block Jacobi (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
 /// [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
 #[cfg(feature = "mpi")]
-fn ranks_solver(
+fn ranks_system(
     problem: &Problem,
-    rhs: &StepRhs,
-    (a, order, first_contact): (&CsrMatrix, &[usize], usize),
+    k: f64,
+    (order, first_contact): (&[usize], usize),
     params: &KrylovParams,
-) -> Result<KrylovSolver, StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
+    use super::ranks::{RankKrylov, RankRows};
     use crate::la::mpi::{DistributedKrylov, DistributedPreconditioner};
     let krylov = |preconditioner, rtol, max_iterations| DistributedKrylov {
         preconditioner,
@@ -183,9 +186,11 @@ fn ranks_solver(
     } else {
         DistributedPreconditioner::BlockJacobiShell
     };
-    let mut ranks = super::ranks::RankKrylov::new(
-        problem,
-        (a, order, first_contact),
+    let rows = RankRows::new(problem, order)?;
+    let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &rows.assembled(first_contact));
+    let (mut ranks, a) = RankKrylov::new(
+        rows,
+        (a, first_contact),
         krylov(first, params.rtol, params.max_iterations),
     )?;
     if params.preconditioner == PreconditionerKind::Auto {
@@ -202,17 +207,17 @@ fn ranks_solver(
             ranks.set_preconditioner(DistributedPreconditioner::Gamg);
         }
     }
-    Ok(KrylovSolver::Ranks(ranks))
+    Ok((a, rhs, KrylovSolver::Ranks(ranks)))
 }
 
 /// Without the `mpi` feature there are no ranks: a distributed system is refused.
 #[cfg(not(feature = "mpi"))]
-fn ranks_solver(
+fn ranks_system(
     _problem: &Problem,
-    _rhs: &StepRhs,
-    _system: (&CsrMatrix, &[usize], usize),
+    _k: f64,
+    _system: (&[usize], usize),
     _params: &KrylovParams,
-) -> Result<KrylovSolver, StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
     Err(LaError::Petsc {
         operation: "MPI_Init",
         detail: "this build has no MPI: build thermocontact with `--features mpi` for a distributed run".into(),
@@ -238,7 +243,24 @@ impl KrylovSystem {
         let mut position = vec![0; n];
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
 
-        let (a, rhs) = ordered_rows(problem, k, &order);
+        let (a, rhs, solver, amg) = if params.distributed {
+            let (a, rhs, solver) = ranks_system(problem, k, (&order, first_contact), &params)?;
+            (a, rhs, solver, None)
+        } else {
+            let (a, rhs) = ordered_rows(problem, k, &order);
+            let ilu = Ilu0::with_domains(&a, parts)?;
+            let with_amg = match params.preconditioner {
+                PreconditionerKind::Ilu => false,
+                PreconditionerKind::Amg => true,
+                PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
+            };
+            let amg = if with_amg {
+                Some(VelocityAmg::new(problem, &a, &order)?)
+            } else {
+                None
+            };
+            (a, rhs, KrylovSolver::Process(ilu), amg)
+        };
         let base = a.values_from(first_contact).to_vec();
         let nodes = (problem.contact.iter())
             .map(|node| {
@@ -259,22 +281,6 @@ impl KrylovSystem {
                 }
             })
             .collect();
-        let (solver, amg) = if params.distributed {
-            (ranks_solver(problem, &rhs, (&a, &order, first_contact), &params)?, None)
-        } else {
-            let ilu = Ilu0::with_domains(&a, parts)?;
-            let with_amg = match params.preconditioner {
-                PreconditionerKind::Ilu => false,
-                PreconditionerKind::Amg => true,
-                PreconditionerKind::Auto => VelocityAmg::AVAILABLE && ilu_needs_amg(problem, &rhs, &order, (&a, &ilu))?,
-            };
-            let amg = if with_amg {
-                Some(VelocityAmg::new(problem, &a, &order)?)
-            } else {
-                None
-            };
-            (KrylovSolver::Process(ilu), amg)
-        };
         Ok(KrylovSystem {
             rhs,
             order,

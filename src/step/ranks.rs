@@ -41,11 +41,7 @@ use crate::partition::DofLayout;
 /// preconditioner of this rank's block where block Jacobi uses this crate's ILU(0).
 pub(crate) struct RankKrylov {
     matrix: DistributedMatrix,
-    /// The row of Ã (the system's order) of each global index this rank owns, in order:
-    /// ascending, so that PETSc's order of a rank's rows is the system's.
-    owned_rows: Vec<usize>,
-    /// The global index (PETSc's layout) of each row of Ã.
-    global_of_row: Vec<usize>,
+    rows: RankRows,
     params: DistributedKrylov,
     /// Stored entries of this rank's rows.
     n_entries: usize,
@@ -68,7 +64,8 @@ struct RankBlock {
     changing: (Vec<usize>, Vec<u32>, Vec<f64>),
     /// The first row of the block a linearization changes.
     first_changing: usize,
-    /// For each value of `changing`, the index of its value in Ã's values.
+    /// For each value of `changing`, the index of its value among the values of Ã's rows
+    /// from the first changing one on ([`CsrMatrix::values_from`]).
     value_of_entry: Vec<usize>,
 }
 
@@ -85,13 +82,13 @@ impl RankBlock {
         let (mut ptr, mut col, mut val, mut value_of_entry) = (vec![0], Vec::new(), Vec::new(), Vec::new());
         for (i, &row) in owned_rows.iter().enumerate() {
             let (cols, values) = a.row(row);
-            for ((p, &c), &v) in a.offset_from(0, row).zip(cols).zip(values) {
+            for (j, (&c, &v)) in cols.iter().zip(values).enumerate() {
                 let local = local_of_row[c as usize];
                 if local != u32::MAX {
                     col.push(local);
                     val.push(v);
                     if i >= first {
-                        value_of_entry.push(p);
+                        value_of_entry.push(a.offset_from(first_changing, row).start + j);
                     }
                 }
             }
@@ -113,10 +110,10 @@ impl RankBlock {
         })
     }
 
-    /// The block's changing rows again from Ã's values (no row before them changed),
-    /// refactored.
-    fn update(&mut self, a: &CsrMatrix) -> Result<(), LaError> {
-        let all = a.values_from(0);
+    /// The block's changing rows again from Ã's values (no row before them changed; Ã's
+    /// first changing row `first_changing`), refactored.
+    fn update(&mut self, a: &CsrMatrix, first_changing: usize) -> Result<(), LaError> {
+        let all = a.values_from(first_changing);
         let (ptr, col, val) = &mut self.changing;
         val.iter_mut().zip(&self.value_of_entry).for_each(|(v, &p)| *v = all[p]);
         let first = self.first_changing;
@@ -128,87 +125,123 @@ impl RankBlock {
     }
 }
 
-impl RankKrylov {
-    /// Lays the unknowns out over the run's partition of the mesh ([`Problem::partition`]) and
-    /// sets PETSc's matrix up with this rank's rows of `a` (the system's rows, row i the unknown
-    /// `order[i]`, the rows from `first_changing` on those a linearization changes); collective.
-    pub(crate) fn new(
-        problem: &Problem,
-        (a, order, first_changing): (&CsrMatrix, &[usize], usize),
-        params: DistributedKrylov,
-    ) -> Result<Self, LaError> {
+/// Which rows of Ã a rank owns and where every row of Ã is in PETSc's layout: the run's
+/// partition of the mesh ([`Problem::partition`]) laid out by unknowns ([`DofLayout`]), each
+/// rank's rows numbered in the system's order.
+pub(crate) struct RankRows {
+    /// The row of Ã (the system's order) of each global index this rank owns, in order:
+    /// ascending, so that PETSc's order of a rank's rows is the system's.
+    owned: Vec<usize>,
+    /// The global index (PETSc's layout) of each row of Ã.
+    global_of_row: Vec<usize>,
+}
+
+impl RankRows {
+    /// The layout of Ã's rows (row i the unknown `order[i]`) over the ranks; collective.
+    pub(crate) fn new(problem: &Problem, order: &[usize]) -> Result<Self, LaError> {
         let comm = Communicator::world()?;
         let partition = problem.partition(&comm)?;
         let layout = DofLayout::new(partition, order.len(), |p, out| node_unknowns(problem, p, out));
-        // Each rank's unknowns as the layout gives them, numbered in the system's order.
         let mut row_of_unknown = vec![0; order.len()];
         order.iter().enumerate().for_each(|(row, &u)| row_of_unknown[u] = row);
         let mut global_of_row = vec![0; order.len()];
-        let mut owned_rows = Vec::new();
+        let mut owned = Vec::new();
         for rank in 0..comm.size() {
-            let owned = layout.owned(rank);
-            let mut rows: Vec<usize> = layout.order[owned.clone()].iter().map(|&u| row_of_unknown[u]).collect();
+            let range = layout.owned(rank);
+            let mut rows: Vec<usize> = layout.order[range.clone()].iter().map(|&u| row_of_unknown[u]).collect();
             rows.sort_unstable();
-            rows.iter().zip(owned).for_each(|(&row, g)| global_of_row[row] = g);
+            rows.iter().zip(range).for_each(|(&row, g)| global_of_row[row] = g);
             if rank == comm.rank() {
-                owned_rows = rows;
+                owned = rows;
             }
         }
-        let n_entries: usize = owned_rows.iter().map(|&row| a.row(row).0.len()).sum();
+        Ok(RankRows { owned, global_of_row })
+    }
+
+    /// The rows of Ã this rank assembles: its own, and every row from `first_changing` on
+    /// (those a linearization changes, which every rank forms from the same iterate).
+    pub(crate) fn assembled(&self, first_changing: usize) -> Vec<usize> {
+        let own = self.owned.iter().copied().filter(|&row| row < first_changing);
+        own.chain(first_changing..self.global_of_row.len()).collect()
+    }
+}
+
+impl RankKrylov {
+    /// Sets PETSc's matrix up with this rank's rows of `a` (the system's rows, laid out by
+    /// `rows`; at least [`RankRows::assembled`]'s rows of Ã), the rows from `first_changing`
+    /// on those a linearization changes, and returns the solver with `a`'s rows from
+    /// `first_changing` on, the only ones read after set-up (the others emptied:
+    /// [`CsrMatrix::keep_rows_from`]); collective.
+    ///
+    /// The order keeps the peak low: this rank's block and its factor first, then PETSc's rows
+    /// in PETSc's numbering, then `a`'s own rows are dropped before PETSc copies those, so that
+    /// at most three of (`a`'s rows, the block, PETSc's rows, their copy in PETSc) are held at a
+    /// time. Measured at 972k unknowns on 2 ranks: docs/distributed.md.
+    pub(crate) fn new(
+        rows: RankRows,
+        (a, first_changing): (CsrMatrix, usize),
+        params: DistributedKrylov,
+    ) -> Result<(Self, CsrMatrix), LaError> {
+        let comm = Communicator::world()?;
+        let block = match params.preconditioner {
+            DistributedPreconditioner::BlockJacobiShell => {
+                Some(Box::new(RankBlock::new(&a, &rows.owned, first_changing)?))
+            }
+            _ => None,
+        };
+        let n_entries: usize = rows.owned.iter().map(|&row| a.row(row).0.len()).sum();
         let (mut ptr, mut cols, mut values) = (vec![0], Vec::with_capacity(n_entries), Vec::with_capacity(n_entries));
         let mut entries = Vec::new();
-        for &row in &owned_rows {
+        for &row in &rows.owned {
             let (c, v) = a.row(row);
             entries.clear();
-            entries.extend(c.iter().map(|&c| global_of_row[c as usize]).zip(v));
+            entries.extend(c.iter().map(|&c| rows.global_of_row[c as usize] as u32).zip(v));
             entries.sort_unstable_by_key(|&(g, _)| g);
             cols.extend(entries.iter().map(|&(g, _)| g));
             values.extend(entries.iter().map(|&(_, &v)| v));
             ptr.push(cols.len());
         }
+        let a = a.keep_rows_from(first_changing);
         let matrix = DistributedMatrix::from_rows(&comm, &ptr, &cols, &values)?;
-        drop((ptr, cols, values));
-        let mut solver = RankKrylov {
+        let solver = RankKrylov {
             matrix,
-            owned_rows,
-            global_of_row,
+            rows,
             params,
             n_entries,
-            block: None,
+            block,
             first_changing,
         };
-        if params.preconditioner == DistributedPreconditioner::BlockJacobiShell {
-            solver.block = Some(Box::new(RankBlock::new(a, &solver.owned_rows, first_changing)?));
-        }
-        Ok(solver)
+        Ok((solver, a))
     }
 
     /// Ã's values into PETSc's matrix (this rank's rows), and into this rank's block, whose
-    /// rows from Ã's row `first_changed` on are refactored; collective.
+    /// rows from Ã's row `first_changed` on are refactored; collective. Only rows from
+    /// `first_changing` on change after set-up (A's rows are fixed per step size).
     pub(crate) fn set_matrix(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
-        let first = self.owned_rows.partition_point(|&row| row < first_changed);
+        debug_assert!(
+            first_changed >= self.first_changing,
+            "a row before the changing ones changed"
+        );
+        let first = self
+            .rows
+            .owned
+            .partition_point(|&row| row < first_changed.max(self.first_changing));
         self.set_rows_from(a, first)?;
-        match (&mut self.block, self.params.preconditioner) {
-            (Some(block), DistributedPreconditioner::BlockJacobiShell) if first_changed >= self.first_changing => {
-                block.update(a)
-            }
-            (_, DistributedPreconditioner::BlockJacobiShell) => {
-                self.block = Some(Box::new(RankBlock::new(a, &self.owned_rows, self.first_changing)?));
-                Ok(())
-            }
-            _ => Ok(()),
+        match &mut self.block {
+            Some(block) => block.update(a, self.first_changing),
+            None => Ok(()),
         }
     }
 
     /// This rank's rows of Ã from its `first` owned row on (in the system's order, so the rows
     /// a linearization changes are a rank's last) into PETSc's matrix; collective.
     fn set_rows_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), LaError> {
-        let rows = &self.owned_rows[first..];
+        let rows = &self.rows.owned[first..];
         let start = self.matrix.owned().start + first;
         let (mut ptr, mut cols, mut values) = (vec![0], Vec::new(), Vec::new());
         for &row in rows {
             let (c, v) = a.row(row);
-            cols.extend(c.iter().map(|&c| self.global_of_row[c as usize]));
+            cols.extend(c.iter().map(|&c| self.rows.global_of_row[c as usize]));
             values.extend_from_slice(v);
             ptr.push(cols.len());
         }
@@ -219,14 +252,16 @@ impl RankKrylov {
     /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x whole, in the system's order, the same
     /// on every rank), x replaced by the solution on every rank; collective.
     pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
-        let owned_rhs: Vec<f64> = self.owned_rows.iter().map(|&row| rhs[row]).collect();
-        let mut owned_x: Vec<f64> = self.owned_rows.iter().map(|&row| x[row]).collect();
+        let owned_rhs: Vec<f64> = self.rows.owned.iter().map(|&row| rhs[row]).collect();
+        let mut owned_x: Vec<f64> = self.rows.owned.iter().map(|&row| x[row]).collect();
         let block = self.block.as_ref().map(|b| &b.ilu as &dyn Preconditioner);
         let solved = self.matrix.solve_from(&self.params, &owned_rhs, &mut owned_x, block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = solved?;
         let whole = self.matrix.all_gather()?;
-        x.iter_mut().zip(&self.global_of_row).for_each(|(x, &g)| *x = whole[g]);
+        x.iter_mut()
+            .zip(&self.rows.global_of_row)
+            .for_each(|(x, &g)| *x = whole[g]);
         Ok(SolveInfo {
             iterations: info.iterations,
             residual: info.residual,
