@@ -30,6 +30,9 @@ mod petsc {
                 "the `mpi` feature needs MPI's pkg-config file (Debian: apt-get install libopenmpi-dev)"
             );
             c.file("csrc/petsc_mpi.c");
+            // Scotch's random generator, reset before each partition (its headers and library
+            // come with libpetsc-real-dev's libptscotch-dev).
+            println!("cargo:rustc-link-lib=ptscotch");
         }
         for path in petsc
             .include_paths

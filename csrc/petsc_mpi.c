@@ -12,6 +12,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <stdint.h>
+#include <scotch/scotch.h>
 
 int tc_petsc_initialize(void);
 
@@ -98,7 +100,10 @@ void tc_mpi_abort(const char *message, int code)
 
 /* Partition of the graph (xadj, adjncy: CSR adjacency without self-loops, n vertices) into
  * n_parts by PETSc's MatPartitioning of type `type` ("ptscotch"), on this rank alone
- * (PETSC_COMM_SELF). part[v] receives the part of vertex v. */
+ * (PETSC_COMM_SELF). part[v] receives the part of vertex v. The same graph gives the same
+ * parts on every call and in every run: Scotch's random generator is reset to a fixed seed
+ * first (Debian's Scotch seeds it from the clock, so two runs of one case were split
+ * differently and, preconditioned differently, took different Krylov iterations). */
 int tc_partition_graph(int n, const int *xadj, const int *adjncy, int n_parts, const char *type, int *part)
 {
   Mat             adj;
@@ -118,6 +123,8 @@ int tc_partition_graph(int n, const int *xadj, const int *adjncy, int n_parts, c
   PetscCall(MatPartitioningSetNParts(partitioning, n_parts));
   PetscCall(MatPartitioningSetType(partitioning, type));
   PetscCall(MatPartitioningSetFromOptions(partitioning));
+  SCOTCH_randomSeed(1);
+  SCOTCH_randomReset();
   PetscCall(MatPartitioningApply(partitioning, &is));
   PetscCall(ISGetIndices(is, &parts));
   for (int v = 0; v < n; ++v) part[v] = (int)parts[v];
@@ -199,36 +206,36 @@ int tc_dist_create(int n_owned, int n_global, int bs, long long n_coo, const int
   return 0;
 }
 
-/* The matrix from this rank's rows as CSR (n_owned rows; row r's entries ptr[r]..ptr[r + 1] of
- * the global columns `cols`, ascending within a row, and `values`), preallocated exactly
- * (MatMPIAIJSetPreallocationCSR, linear in the entries, where the COO preallocation sorts
- * them); its values are changed by tc_dist_set_rows, never its pattern. */
-static PetscErrorCode tc_dist_setup_csr(tc_dist *dist, int n_owned, int n_global, const long long *ptr, const int *cols,
-                                        const double *values)
+/* The matrix from this rank's rows split as PETSc keeps them (n_owned rows): the diagonal
+ * block (row pointers di, columns dj local to the rank's first column, values da) and the rest
+ * (oi, oj in global columns, oa), columns ascending within a row. The arrays are PETSc's storage
+ * from here on, not copied (MatCreateMPIAIJWithSplitArrays): the caller keeps them, unchanged,
+ * until tc_dist_destroy, and its values change through tc_dist_set_rows only. Needs 32-bit
+ * PetscInt (the arrays are the caller's ints). */
+static PetscErrorCode tc_dist_setup_split(tc_dist *dist, int n_owned, int n_global, int *di, int *dj, double *da,
+                                          int *oi, int *oj, double *oa)
 {
-  PetscInt *i, *j;
   PetscFunctionBeginUser;
-  PetscCall(MatCreate(PETSC_COMM_WORLD, &dist->A));
-  PetscCall(MatSetSizes(dist->A, n_owned, n_owned, n_global, n_global));
-  PetscCall(MatSetType(dist->A, MATMPIAIJ));
-  PetscCall(PetscMalloc2(n_owned + 1, &i, ptr[n_owned], &j));
-  for (int r = 0; r <= n_owned; ++r) i[r] = (PetscInt)ptr[r];
-  for (long long e = 0; e < ptr[n_owned]; ++e) j[e] = cols[e];
-  PetscCall(MatMPIAIJSetPreallocationCSR(dist->A, i, j, values));
-  PetscCall(PetscFree2(i, j));
+#if defined(PETSC_USE_64BIT_INDICES)
+  (void)dist; (void)n_owned; (void)n_global; (void)di; (void)dj; (void)da; (void)oi; (void)oj; (void)oa;
+  SETERRQ(PETSC_COMM_SELF, PETSC_ERR_SUP, "the split arrays need PETSc with 32-bit indices");
+#else
+  PetscCall(MatCreateMPIAIJWithSplitArrays(PETSC_COMM_WORLD, n_owned, n_owned, n_global, n_global, di, dj, da, oi,
+                                           oj, oa, &dist->A));
   PetscCall(MatSetOption(dist->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
   PetscCall(MatCreateVecs(dist->A, &dist->x, &dist->b));
+#endif
   PetscFunctionReturn(0);
 }
 
-int tc_dist_create_csr(int n_owned, int n_global, const long long *ptr, const int *cols, const double *values,
-                       tc_dist **out)
+int tc_dist_create_split(int n_owned, int n_global, int *di, int *dj, double *da, int *oi, int *oj, double *oa,
+                         tc_dist **out)
 {
   PetscErrorCode ierr;
   *out = NULL;
   tc_dist *dist = calloc(1, sizeof *dist);
   if (!dist) return PETSC_ERR_MEM;
-  ierr = tc_dist_setup_csr(dist, n_owned, n_global, ptr, cols, values);
+  ierr = tc_dist_setup_split(dist, n_owned, n_global, di, dj, da, oi, oj, oa);
   if (ierr) {
     tc_dist_destroy(dist);
     return (int)ierr;

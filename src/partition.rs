@@ -210,6 +210,25 @@ mod tests {
         );
     }
 
+    /// PT-Scotch splits the same mesh the same way on every call, so that two runs of one case
+    /// on P ranks take the same steps. Its threaded algorithms moved a few cells of 2 600 from
+    /// call to call (this test fails with `SCOTCH_PTHREAD_NUMBER=2`), and a second call in one
+    /// process drew other random numbers without the generator's reset.
+    #[cfg(feature = "mpi")]
+    #[test]
+    fn the_same_mesh_is_split_the_same_way_every_time() {
+        let mesh = cuboid([40.0, 10.0, 10.0], [24, 6, 6]);
+        for parts in [2, 3] {
+            let first = MeshPartition::new(&mesh, parts).unwrap();
+            for _ in 0..3 {
+                let again = MeshPartition::new(&mesh, parts).unwrap();
+                for r in 0..parts {
+                    assert_eq!(again.cells_of(r), first.cells_of(r), "part {r} of {parts}");
+                }
+            }
+        }
+    }
+
     /// With the cells' parts given, a node shared by parts 1 and 2 belongs to 1, and the
     /// ghosts of part 2 are its nodes that 0 or 1 own.
     #[test]

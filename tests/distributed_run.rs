@@ -219,7 +219,43 @@ mod distributed {
             );
             assert_runs_agree(&one, &out);
         }
+        let again = dir.join("ranks-2-again");
+        let output = run(2, &again, args);
+        assert!(output.status.success(), "2 ranks again:\n{}", text(&output));
+        assert_runs_identical(&dir.join("ranks-2"), &again);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Two runs of one case on the same ranks give the same numbers: `steps.csv` but its
+    /// wall-clock column, and every contact file, byte for byte (the partition is the same
+    /// every time: `partition::tests`).
+    fn assert_runs_identical(one: &Path, other: &Path) {
+        let (header, first) = read_csv(&one.join("steps.csv"));
+        let (_, second) = read_csv(&other.join("steps.csv"));
+        let seconds = header.iter().position(|h| h == "seconds").expect("a seconds column");
+        let without_clock = |rows: Vec<Vec<String>>| -> Vec<Vec<String>> {
+            rows.into_iter()
+                .map(|mut row| {
+                    row.remove(seconds);
+                    row
+                })
+                .collect()
+        };
+        assert_eq!(
+            without_clock(first),
+            without_clock(second),
+            "steps.csv of two identical runs"
+        );
+        let mut contact_files = 0;
+        for entry in std::fs::read_dir(one).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            if name.starts_with("contact_") && name.ends_with(".csv") {
+                let bytes = |dir: &Path| std::fs::read(dir.join(&name)).unwrap();
+                assert!(bytes(one) == bytes(other), "{name} of two identical runs");
+                contact_files += 1;
+            }
+        }
+        assert!(contact_files > 0, "contact files in {}", one.display());
     }
 
     fn scenario(name: &str) -> String {

@@ -71,12 +71,15 @@ extern "C" {
         cols: *const c_int,
         out: *mut *mut RawDist,
     ) -> c_int;
-    fn tc_dist_create_csr(
+    fn tc_dist_create_split(
         n_owned: c_int,
         n_global: c_int,
-        ptr: *const c_longlong,
-        cols: *const c_int,
-        values: *const c_double,
+        di: *mut c_int,
+        dj: *mut c_int,
+        da: *mut c_double,
+        oi: *mut c_int,
+        oj: *mut c_int,
+        oa: *mut c_double,
         out: *mut *mut RawDist,
     ) -> c_int;
     fn tc_dist_set_values(dist: *mut RawDist, values: *const c_double) -> c_int;
@@ -172,6 +175,18 @@ fn index32(operation: &'static str, i: usize) -> Result<c_int, Error> {
     c_int::try_from(i).map_err(|_| Error::Petsc {
         operation,
         detail: format!("index {i} exceeds PETSc's 32-bit indices"),
+    })
+}
+
+/// The first of the `n_rows` rows of `parts` whose columns are not ascending or not all
+/// `in_range` (row 0 where the arrays do not hold `n_rows` rows).
+fn first_bad_row((ptr, cols, values): &CsrParts, n_rows: usize, in_range: impl Fn(usize) -> bool) -> Option<usize> {
+    if ptr.len() != n_rows + 1 || ptr[0] != 0 || ptr[n_rows] != cols.len() || cols.len() != values.len() {
+        return Some(0);
+    }
+    (0..n_rows).find(|&r| {
+        let row = &cols[ptr[r]..ptr[r + 1]];
+        ptr[r] > ptr[r + 1] || row.windows(2).any(|w| w[0] >= w[1]) || row.iter().any(|&c| !in_range(c as usize))
     })
 }
 
@@ -324,6 +339,11 @@ pub fn partition_graph(xadj: &[usize], adjacency: &[usize], n_parts: usize) -> R
         .collect::<Result<Vec<_>, _>>()?;
     let adjacency32: Vec<c_int> = adjacency.iter().map(|&u| u as c_int).collect();
     let mut part = vec![0 as c_int; n];
+    // Scotch's threaded algorithms do not give the same parts twice (docs/distributed.md): one
+    // thread, unless the user asks for more.
+    if std::env::var_os("SCOTCH_PTHREAD_NUMBER").is_none() {
+        std::env::set_var("SCOTCH_PTHREAD_NUMBER", "1");
+    }
     let _petsc = petsc_lock();
     initialized()?;
     // SAFETY: checked CSR arrays of n vertices; `part` has n entries.
@@ -397,6 +417,19 @@ pub struct DistributedMatrix {
     n_global: usize,
     n_coo: usize,
     krylov: Option<DistributedKrylov>,
+    /// The arrays PETSc keeps this rank's rows in, where they are this crate's
+    /// ([`DistributedMatrix::from_split`]): never read here, only kept until PETSc's matrix is
+    /// destroyed (dropped after [`Drop::drop`]).
+    _storage: Option<Box<SplitStorage>>,
+}
+
+/// A rank's rows as CSR: row pointers (from 0), columns ascending within each row, values.
+pub type CsrParts = (Vec<usize>, Vec<u32>, Vec<f64>);
+
+/// The arrays of [`DistributedMatrix::from_split`], in PETSc's index type.
+struct SplitStorage {
+    _diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
+    _off_diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
 }
 
 impl DistributedMatrix {
@@ -413,11 +446,7 @@ impl DistributedMatrix {
     ) -> Result<Self, Error> {
         const OPERATION: &str = "MatSetPreallocationCOO";
         assert_eq!(rows.len(), cols.len(), "one column per row index");
-        let mut counts = vec![0; comm.size()];
-        counts[comm.rank()] = n_owned;
-        comm.all_reduce_usize(&mut counts, Reduction::Sum)?;
-        let n_global: usize = counts.iter().sum();
-        let first: usize = counts[..comm.rank()].iter().sum();
+        let (n_global, owned) = Self::layout(comm, n_owned)?;
         if let Some(e) = (0..rows.len()).find(|&e| rows[e] >= n_global || cols[e] >= n_global) {
             return Err(Error::Petsc {
                 operation: OPERATION,
@@ -443,7 +472,7 @@ impl DistributedMatrix {
                 &mut raw,
             )
         };
-        Self::created(OPERATION, (code, raw), first..first + n_owned, n_global, rows.len())
+        Self::created(OPERATION, (code, raw), owned, n_global, rows.len())
     }
 
     /// The matrix the C layer created (`code` 0 and `raw` set), or the error of `operation`.
@@ -463,58 +492,109 @@ impl DistributedMatrix {
             n_global,
             n_coo,
             krylov: None,
+            _storage: None,
         })
     }
 
     /// The matrix from this rank's rows (consecutive, after those of the ranks below it) as
     /// CSR: row r's entries `ptr[r]..ptr[r + 1]` of `cols` (global columns, ascending within the
-    /// row) and `values`. Its pattern is fixed: values change by [`DistributedMatrix::set_rows`]
-    /// (there are no COO pairs for [`DistributedMatrix::set_values`]). Preallocated in time
-    /// linear in the entries (PETSc's CSR preallocation), where the COO one sorts the pairs:
-    /// at 972k unknowns on 2 ranks, 14–17 s of the set-up's 36–40 s (machine loaded). The
-    /// columns are 32-bit, as PETSc's indices are: handed over without a copy.
+    /// row) and `values`, split and handed to [`DistributedMatrix::from_split`] (a copy of the
+    /// rows: a caller that builds the two parts itself saves it). Its pattern is fixed: values
+    /// change by [`DistributedMatrix::set_rows`] (there are no COO pairs for
+    /// [`DistributedMatrix::set_values`]).
     pub fn from_rows(comm: &Communicator, ptr: &[usize], cols: &[u32], values: &[f64]) -> Result<Self, Error> {
-        const OPERATION: &str = "MatMPIAIJSetPreallocationCSR";
         let n_owned = ptr.len().checked_sub(1).expect("n_owned + 1 offsets");
         assert!(ptr[0] == 0 && ptr[n_owned] == cols.len() && cols.len() == values.len());
+        let first = Self::layout(comm, n_owned)?.1.start as u32;
+        let (mut diagonal, mut off_diagonal): (CsrParts, CsrParts) = Default::default();
+        diagonal.0.push(0);
+        off_diagonal.0.push(0);
+        for r in 0..n_owned {
+            for (&c, &v) in cols[ptr[r]..ptr[r + 1]].iter().zip(&values[ptr[r]..ptr[r + 1]]) {
+                let (part, column) = match c.checked_sub(first).filter(|&local| (local as usize) < n_owned) {
+                    Some(local) => (&mut diagonal, local),
+                    None => (&mut off_diagonal, c),
+                };
+                part.1.push(column);
+                part.2.push(v);
+            }
+            diagonal.0.push(diagonal.1.len());
+            off_diagonal.0.push(off_diagonal.1.len());
+        }
+        Self::from_split(comm, diagonal, off_diagonal)
+    }
+
+    /// This rank's row count of every rank summed (the global size) and its own global rows;
+    /// collective.
+    fn layout(comm: &Communicator, n_owned: usize) -> Result<(usize, Range<usize>), Error> {
         let mut counts = vec![0; comm.size()];
         counts[comm.rank()] = n_owned;
         comm.all_reduce_usize(&mut counts, Reduction::Sum)?;
-        let n_global: usize = counts.iter().sum();
         let first: usize = counts[..comm.rank()].iter().sum();
-        if let Some(r) = (0..n_owned).find(|&r| {
-            let row = &cols[ptr[r]..ptr[r + 1]];
-            ptr[r] > ptr[r + 1]
-                || row.windows(2).any(|w| w[0] >= w[1])
-                || row.last().is_some_and(|&c| c as usize >= n_global)
-        }) {
-            return Err(Error::Petsc {
-                operation: OPERATION,
-                detail: format!(
-                    "row {} has columns {:?}, not ascending below {n_global}",
-                    first + r,
-                    &cols[ptr[r]..ptr[r + 1]]
-                ),
-            });
+        Ok((counts.iter().sum(), first..first + n_owned))
+    }
+
+    /// The matrix from this rank's rows (consecutive, after those of the ranks below it) split
+    /// as PETSc's MPIAIJ keeps them: the `diagonal` block (its columns local, counted from the
+    /// rank's first row) and the `off_diagonal` rest (global columns), each as CSR with its
+    /// columns ascending within a row. PETSc keeps its values in these arrays, not in a copy
+    /// (`MatCreateMPIAIJWithSplitArrays`): the matrix owns them; its pattern is fixed, its
+    /// values change by [`DistributedMatrix::set_rows`]. Measured at 972k unknowns on 2 ranks
+    /// (docs/distributed.md): 1.3–1.6 s and a copy of the rank's rows less than PETSc's CSR
+    /// preallocation, which inserts every row again.
+    pub fn from_split(comm: &Communicator, diagonal: CsrParts, off_diagonal: CsrParts) -> Result<Self, Error> {
+        const OPERATION: &str = "MatCreateMPIAIJWithSplitArrays";
+        let n_owned = diagonal.0.len().checked_sub(1).expect("n_owned + 1 offsets");
+        let (n_global, owned) = Self::layout(comm, n_owned)?;
+        let diagonal_bad = first_bad_row(&diagonal, n_owned, |c| c < n_owned);
+        let off_bad = first_bad_row(&off_diagonal, n_owned, |c| c < n_global && !owned.contains(&c));
+        for (part, bad) in [("diagonal block", diagonal_bad), ("off-diagonal part", off_bad)] {
+            if let Some(r) = bad {
+                return Err(Error::Petsc {
+                    operation: OPERATION,
+                    detail: format!(
+                        "row {} of the {part}: its columns are not ascending within the part (rows {owned:?} of {n_global})",
+                        owned.start + r
+                    ),
+                });
+            }
         }
-        index32(OPERATION, cols.len())?;
-        let (n_owned32, n_global32) = (index32(OPERATION, n_owned)?, index32(OPERATION, n_global)?);
-        let ptr64: Vec<c_longlong> = ptr.iter().map(|&p| p as c_longlong).collect();
+        let n_owned32 = index32(OPERATION, n_owned)?;
+        let n_global32 = index32(OPERATION, n_global)?;
+        let pointers = |ptr: Vec<usize>| -> Result<Vec<c_int>, Error> {
+            index32(OPERATION, ptr[n_owned])?;
+            Ok(ptr.into_iter().map(|p| p as c_int).collect())
+        };
+        let mut storage = Box::new(SplitStorage {
+            _diagonal: (pointers(diagonal.0)?, diagonal.1, diagonal.2),
+            _off_diagonal: (pointers(off_diagonal.0)?, off_diagonal.1, off_diagonal.2),
+        });
+        let SplitStorage {
+            _diagonal: (di, dj, da),
+            _off_diagonal: (oi, oj, oa),
+        } = &mut *storage;
         let mut raw = std::ptr::null_mut();
         let _petsc = petsc_lock();
         // SAFETY: checked CSR arrays of n_owned rows, every column below n_global ≤ c_int::MAX,
-        // so the u32 columns read as c_int are the same numbers; `raw` is written on success.
+        // so the u32 columns read as c_int are the same numbers. PETSc keeps pointers to the
+        // arrays: they live in `storage`, on the heap, until after tc_dist_destroy (the field
+        // drops after `Drop::drop`), and nothing here reads or moves them meanwhile.
         let code = unsafe {
-            tc_dist_create_csr(
+            tc_dist_create_split(
                 n_owned32,
                 n_global32,
-                ptr64.as_ptr(),
-                cols.as_ptr().cast::<c_int>(),
-                values.as_ptr(),
+                di.as_mut_ptr(),
+                dj.as_mut_ptr().cast::<c_int>(),
+                da.as_mut_ptr(),
+                oi.as_mut_ptr(),
+                oj.as_mut_ptr().cast::<c_int>(),
+                oa.as_mut_ptr(),
                 &mut raw,
             )
         };
-        Self::created(OPERATION, (code, raw), first..first + n_owned, n_global, 0)
+        let mut matrix = Self::created(OPERATION, (code, raw), owned, n_global, 0)?;
+        matrix._storage = Some(storage);
+        Ok(matrix)
     }
 
     /// The rows this rank owns.
@@ -856,5 +936,21 @@ mod tests {
         }
         assert_eq!(part.windows(2).filter(|w| w[0] != w[1]).count(), 3, "{part:?}");
         assert!(partition_graph(&[0, 1], &[0], 2).is_err(), "a self-loop is refused");
+    }
+
+    /// On one process every column is in the diagonal block: a row with its columns out of
+    /// order, or a column outside the block, is refused with the row named, not handed to PETSc.
+    #[test]
+    fn split_rows_out_of_order_are_refused() {
+        let comm = Communicator::world().unwrap();
+        let empty = || (vec![0, 0, 0], vec![], vec![]);
+        let unsorted = (vec![0, 1, 3], vec![0, 1, 0], vec![2.0, 2.0, -1.0]);
+        let error = DistributedMatrix::from_split(&comm, unsorted, empty()).err().unwrap();
+        assert!(error.to_string().contains("row 1 of the diagonal block"), "{error}");
+        let outside = (vec![0, 1, 2], vec![0, 2], vec![1.0, 1.0]);
+        assert!(DistributedMatrix::from_split(&comm, outside, empty()).is_err());
+        let sorted = (vec![0, 2, 4], vec![0, 1, 0, 1], vec![2.0, -1.0, -1.0, 2.0]);
+        let matrix = DistributedMatrix::from_split(&comm, sorted, empty()).unwrap();
+        assert_eq!((matrix.owned(), matrix.n_global()), (0..2, 2));
     }
 }

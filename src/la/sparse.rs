@@ -304,6 +304,12 @@ impl CsrMatrix {
         self.ptr[i] - self.ptr[first]..self.ptr[i + 1] - self.ptr[first]
     }
 
+    /// The row pointers, column indices and values, for a caller that keeps them in another
+    /// form (PETSc's arrays: `crate::la::mpi::DistributedMatrix::from_split`).
+    pub fn into_parts(self) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+        (self.ptr, self.col, self.val)
+    }
+
     /// The same matrix with rows `0..first` emptied: rows `first..n` kept as they are, with
     /// their columns (a rank of a distributed run keeps only the rows each linearization
     /// changes once PETSc and its block have the others: `step::ranks`).

@@ -31,7 +31,7 @@
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
 
-use crate::la::mpi::{Communicator, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
+use crate::la::mpi::{Communicator, CsrParts, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
 use crate::la::{CsrMatrix, Ilu0, LaError, Preconditioner, SolveInfo};
 use crate::model::{node_unknowns, Problem};
 use crate::partition::DofLayout;
@@ -70,40 +70,21 @@ struct RankBlock {
 }
 
 impl RankBlock {
-    /// The ILU(0) of the block of Ã at the system rows `owned_rows` (ascending), the rows from
-    /// the system row `first_changing` on kept for [`RankBlock::update`].
-    fn new(a: &CsrMatrix, owned_rows: &[usize], first_changing: usize) -> Result<Self, LaError> {
-        let mut local_of_row = vec![u32::MAX; a.n()];
-        owned_rows
-            .iter()
-            .enumerate()
-            .for_each(|(local, &row)| local_of_row[row] = local as u32);
-        let first = owned_rows.partition_point(|&row| row < first_changing);
-        let (mut ptr, mut col, mut val, mut value_of_entry) = (vec![0], Vec::new(), Vec::new(), Vec::new());
-        for (i, &row) in owned_rows.iter().enumerate() {
-            let (cols, values) = a.row(row);
-            for (j, (&c, &v)) in cols.iter().zip(values).enumerate() {
-                let local = local_of_row[c as usize];
-                if local != u32::MAX {
-                    col.push(local);
-                    val.push(v);
-                    if i >= first {
-                        value_of_entry.push(a.offset_from(first_changing, row).start + j);
-                    }
-                }
-            }
-            ptr.push(col.len());
-        }
-        drop(local_of_row);
-        let start = ptr[first];
+    /// The ILU(0) of this rank's diagonal block of Ã, its rows from the block's row `first` on
+    /// kept for [`RankBlock::update`] with `value_of_entry` (for each of their entries, the
+    /// index of its value among Ã's values from its first changing row on).
+    fn new(block: &CsrMatrix, first: usize, value_of_entry: Vec<usize>) -> Result<Self, LaError> {
+        let rows = first..block.n();
+        let mut ptr = vec![0];
+        rows.clone()
+            .for_each(|i| ptr.push(ptr[ptr.len() - 1] + block.row(i).0.len()));
         let changing = (
-            ptr[first..].iter().map(|&p| p - start).collect(),
-            col[start..].to_vec(),
-            val[start..].to_vec(),
+            ptr,
+            rows.flat_map(|i| block.row(i).0).copied().collect(),
+            block.values_from(first).to_vec(),
         );
-        let ilu = Ilu0::new(&CsrMatrix::from_rows(owned_rows.len(), ptr, col, val))?;
         Ok(RankBlock {
-            ilu,
+            ilu: Ilu0::new(block)?,
             changing,
             first_changing: first,
             value_of_entry,
@@ -134,6 +115,8 @@ pub(crate) struct RankRows {
     owned: Vec<usize>,
     /// The global index (PETSc's layout) of each row of Ã.
     global_of_row: Vec<usize>,
+    /// The global index of this rank's first row: `global_of_row[owned[i]]` is `first + i`.
+    first: usize,
 }
 
 impl RankRows {
@@ -145,17 +128,23 @@ impl RankRows {
         let mut row_of_unknown = vec![0; order.len()];
         order.iter().enumerate().for_each(|(row, &u)| row_of_unknown[u] = row);
         let mut global_of_row = vec![0; order.len()];
-        let mut owned = Vec::new();
+        let (mut owned, mut first) = (Vec::new(), 0);
         for rank in 0..comm.size() {
             let range = layout.owned(rank);
             let mut rows: Vec<usize> = layout.order[range.clone()].iter().map(|&u| row_of_unknown[u]).collect();
             rows.sort_unstable();
-            rows.iter().zip(range).for_each(|(&row, g)| global_of_row[row] = g);
+            rows.iter()
+                .zip(range.clone())
+                .for_each(|(&row, g)| global_of_row[row] = g);
             if rank == comm.rank() {
-                owned = rows;
+                (owned, first) = (rows, range.start);
             }
         }
-        Ok(RankRows { owned, global_of_row })
+        Ok(RankRows {
+            owned,
+            global_of_row,
+            first,
+        })
     }
 
     /// The rows of Ã this rank assembles: its own, and every row from `first_changing` on
@@ -163,6 +152,48 @@ impl RankRows {
     pub(crate) fn assembled(&self, first_changing: usize) -> Vec<usize> {
         let own = self.owned.iter().copied().filter(|&row| row < first_changing);
         own.chain(first_changing..self.global_of_row.len()).collect()
+    }
+
+    /// This rank's rows of `a` as PETSc keeps them ([`DistributedMatrix::from_split`]): the
+    /// diagonal block, in local columns, and the rest, in global columns; and for each entry of
+    /// the diagonal block in the rows from `first_changing` on, the index of its value among
+    /// `a`'s values from there. A rank's global rows are its system rows in their order, so the
+    /// diagonal block is Ã's block of this rank's rows and columns, in the system's order.
+    fn split(&self, a: &CsrMatrix, first_changing: usize) -> (CsrParts, CsrParts, Vec<usize>) {
+        let n_owned = self.owned.len();
+        let most: usize = self.owned.iter().map(|&row| a.row(row).0.len()).sum();
+        let mut diagonal = (
+            Vec::with_capacity(n_owned + 1),
+            Vec::with_capacity(most),
+            Vec::with_capacity(most),
+        );
+        let mut off_diagonal = (vec![0], Vec::new(), Vec::new());
+        diagonal.0.push(0);
+        let mut value_of_entry = Vec::new();
+        let mut entries = Vec::new();
+        for &row in &self.owned {
+            let (cols, values) = a.row(row);
+            entries.clear();
+            entries.extend((cols.iter().enumerate()).map(|(j, &c)| (self.global_of_row[c as usize], j)));
+            entries.sort_unstable();
+            let changing = (row >= first_changing).then(|| a.offset_from(first_changing, row).start);
+            for &(g, j) in &entries {
+                match g.checked_sub(self.first).filter(|&local| local < n_owned) {
+                    Some(local) => {
+                        diagonal.1.push(local as u32);
+                        diagonal.2.push(values[j]);
+                        value_of_entry.extend(changing.map(|start| start + j));
+                    }
+                    None => {
+                        off_diagonal.1.push(g as u32);
+                        off_diagonal.2.push(values[j]);
+                    }
+                }
+            }
+            diagonal.0.push(diagonal.1.len());
+            off_diagonal.0.push(off_diagonal.1.len());
+        }
+        (diagonal, off_diagonal, value_of_entry)
     }
 }
 
@@ -173,36 +204,29 @@ impl RankKrylov {
     /// `first_changing` on, the only ones read after set-up (the others emptied:
     /// [`CsrMatrix::keep_rows_from`]); collective.
     ///
-    /// The order keeps the peak low: this rank's block and its factor first, then PETSc's rows
-    /// in PETSc's numbering, then `a`'s own rows are dropped before PETSc copies those, so that
-    /// at most three of (`a`'s rows, the block, PETSc's rows, their copy in PETSc) are held at a
-    /// time. Measured at 972k unknowns on 2 ranks: docs/distributed.md.
+    /// One copy of the rank's rows is made, split as PETSc keeps them
+    /// ([`DistributedMatrix::from_split`], which keeps that copy, not one of its own); `a`'s
+    /// own rows are dropped before the block's ILU(0) is factored from the diagonal part.
+    /// Measured at 972k unknowns on 2 ranks: docs/distributed.md.
     pub(crate) fn new(
         rows: RankRows,
         (a, first_changing): (CsrMatrix, usize),
         params: DistributedKrylov,
     ) -> Result<(Self, CsrMatrix), LaError> {
         let comm = Communicator::world()?;
-        let block = match params.preconditioner {
-            DistributedPreconditioner::BlockJacobiShell => {
-                Some(Box::new(RankBlock::new(&a, &rows.owned, first_changing)?))
-            }
-            _ => None,
-        };
-        let n_entries: usize = rows.owned.iter().map(|&row| a.row(row).0.len()).sum();
-        let (mut ptr, mut cols, mut values) = (vec![0], Vec::with_capacity(n_entries), Vec::with_capacity(n_entries));
-        let mut entries = Vec::new();
-        for &row in &rows.owned {
-            let (c, v) = a.row(row);
-            entries.clear();
-            entries.extend(c.iter().map(|&c| rows.global_of_row[c as usize] as u32).zip(v));
-            entries.sort_unstable_by_key(|&(g, _)| g);
-            cols.extend(entries.iter().map(|&(g, _)| g));
-            values.extend(entries.iter().map(|&(_, &v)| v));
-            ptr.push(cols.len());
-        }
+        let (diagonal, off_diagonal, value_of_entry) = rows.split(&a, first_changing);
+        let n_entries = diagonal.1.len() + off_diagonal.1.len();
         let a = a.keep_rows_from(first_changing);
-        let matrix = DistributedMatrix::from_rows(&comm, &ptr, &cols, &values)?;
+        let (diagonal, block) = match params.preconditioner {
+            DistributedPreconditioner::BlockJacobiShell => {
+                let block = CsrMatrix::from_rows(rows.owned.len(), diagonal.0, diagonal.1, diagonal.2);
+                let first = rows.owned.partition_point(|&row| row < first_changing);
+                let factored = RankBlock::new(&block, first, value_of_entry)?;
+                (block.into_parts(), Some(Box::new(factored)))
+            }
+            _ => (diagonal, None),
+        };
+        let matrix = DistributedMatrix::from_split(&comm, diagonal, off_diagonal)?;
         let solver = RankKrylov {
             matrix,
             rows,
