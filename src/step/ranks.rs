@@ -1,20 +1,22 @@
 //! The iterative path's Krylov solves on PETSc over the MPI ranks of a distributed run (cargo
 //! feature `mpi`, `mpirun -n P thermocontact run`; docs/distributed.md).
 //!
-//! **What is distributed, what is replicated.** Every rank holds the whole problem, the ordered
-//! step matrix Ã of [`super::iterative`] and the Newton iterates x, w, ξ (vectors of N and of
-//! Γ_C: 8 bytes per unknown each). Each linearization changes Ã's Γ_C rows in place on every
-//! rank, the same way from the same iterate. The Krylov solve, which is where a step spends its
-//! time, runs on PETSc: rank r owns the rows of Ã at the unknowns of its part of the mesh
-//! ([`MeshPartition`](crate::partition::MeshPartition): PT-Scotch on the dual graph, computed
-//! on rank 0 and broadcast once per run, shared with the frames' pieces: [`Problem::partition`];
-//! [`DofLayout`]: each rank's unknowns consecutive), hands them to PETSc's MPIAIJ matrix as
-//! CSR rows at set-up ([`DistributedMatrix::from_rows`]) and, after each linearization, only
-//! the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs with block Jacobi (one
-//! block per rank) or GAMG, from the previous iterate as the serial solves do. Each rank's
-//! unknowns are numbered in the system's order, so its block has its Γ_C rows last and its
-//! ILU(0) is the serial path's: single precision, refactored only from the first row a
-//! linearization changes ([`RankBlock`]). The solution is gathered on every rank
+//! **What is distributed, what is replicated.** Every rank holds the whole problem and the
+//! Newton iterates x, w, ξ (vectors of N and of Γ_C: 8 bytes per unknown each). Of the ordered
+//! step matrix Ã of [`super::iterative`] a rank assembles only its own rows and the Γ_C rows
+//! ([`RankRows::assembled`]), and keeps only the Γ_C rows after set-up: each linearization
+//! changes them in place on every rank, the same way from the same iterate. The Krylov solve,
+//! which is where a step spends its time, runs on PETSc: rank r owns the rows of Ã at the
+//! unknowns of its part of the mesh ([`MeshPartition`](crate::partition::MeshPartition):
+//! PT-Scotch on the dual graph, computed on rank 0 and broadcast once per run, shared with the
+//! frames' pieces: [`Problem::partition`]; [`DofLayout`]: each rank's unknowns consecutive),
+//! hands them to PETSc's MPIAIJ matrix at set-up, split into its diagonal block and the rest,
+//! which PETSc keeps without a copy ([`DistributedMatrix::from_split`]) and, after each
+//! linearization, only the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs
+//! with block Jacobi (one block per rank) or GAMG, from the previous iterate as the serial
+//! solves do. Each rank's unknowns are numbered in the system's order, so its block has its
+//! Γ_C rows last and its ILU(0) is the serial path's: single precision, refactored only from the
+//! first row a linearization changes ([`RankBlock`]). The solution is gathered on every rank
 //! (PETSc's scatter to all), so that the nodal law, the stop tests, the slip counts and the
 //! cutback decision are computed from the same numbers on every rank and agree without a
 //! reduction: the ranks take the same branches by construction.
@@ -23,10 +25,11 @@
 //! is O(|Γ_C|) and the stop tests O(N) per iteration against the Krylov solve's O(N) per
 //! Krylov iteration times 5–30 iterations: replicated, they cost little, and the ranks cannot
 //! disagree on a branch (a rank that stops its loop while another iterates would hang in the
-//! next collective call). What replication costs is memory (the problem and Ã on every rank)
-//! and a gather of N values per Newton iteration; docs/distributed.md gives the figures and
-//! what ends them (each rank assembling its own rows, [`crate::model::DistributedStepMatrix`],
-//! with the law on owned Γ_C nodes and reductions for the tests).
+//! next collective call). What replication costs is memory (the problem's matrices on every
+//! rank: 1.5 of a rank's 2.4 GiB at 972k unknowns) and a gather of N values per Newton
+//! iteration; docs/distributed.md gives the figures and what ends them (each rank holding the
+//! matrices' columns of its own and ghost nodes, with the law on owned Γ_C nodes and reductions
+//! for the tests).
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
