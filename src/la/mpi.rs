@@ -2,8 +2,10 @@
 //! (cargo feature `mpi`, which implies `petsc`): the [`Communicator`] (rank, size, reductions,
 //! broadcast from rank 0, barrier, abort of every rank), the partition of a graph by PETSc's
 //! `MatPartitioning` ([`partition_graph`], PT-Scotch), and a [`DistributedMatrix`]: a PETSc
-//! MPIAIJ matrix whose pattern is given once as COO pairs, refilled by value, with its
-//! right-hand side and GMRES preconditioned by block Jacobi + ILU(0) or GAMG; a
+//! MPIAIJ matrix whose pattern is given once, as COO pairs refilled by value or as each rank's
+//! rows that PETSc keeps in the rank's own arrays ([`DistributedMatrix::from_split`]), changed
+//! by rows, with its right-hand side and GMRES preconditioned by block Jacobi (PETSc's ILU(0)
+//! or the caller's preconditioner of each rank's block) or GAMG; a
 //! [`GhostedVector`] (PETSc's `VecGhost`): owned entries and the copies a rank reads of its
 //! neighbours', refreshed by PETSc.
 //!
