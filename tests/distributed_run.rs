@@ -204,6 +204,11 @@ mod distributed {
         let one = dir.join("ranks-1");
         let output = run(1, &one, args);
         assert!(output.status.success(), "one process:\n{}", text(&output));
+        let summary = std::fs::read_to_string(one.join("summary.json")).unwrap();
+        assert!(
+            !summary.contains("peak_memory_per_rank_mib"),
+            "one process lists no ranks"
+        );
         for ranks in [2, 3] {
             let out = dir.join(format!("ranks-{ranks}"));
             let output = run(ranks, &out, args);
@@ -218,12 +223,29 @@ mod distributed {
                 "{ranks} ranks: the frames in pieces"
             );
             assert_runs_agree(&one, &out);
+            assert_peak_memory_per_rank(&out, ranks);
         }
         let again = dir.join("ranks-2-again");
         let output = run(2, &again, args);
         assert!(output.status.success(), "2 ranks again:\n{}", text(&output));
         assert_runs_identical(&dir.join("ranks-2"), &again);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The summary of a run on `ranks` ranks lists each rank's peak memory, and its peak
+    /// memory is the largest of them.
+    fn assert_peak_memory_per_rank(out: &Path, ranks: usize) {
+        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let each: Vec<f64> = (summary["peak_memory_per_rank_mib"].as_array())
+            .unwrap_or_else(|| panic!("no peak memory per rank in {text}"))
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(each.len(), ranks, "{each:?}");
+        assert!(each.iter().all(|&m| m > 1.0), "every rank's peak read: {each:?}");
+        let largest = each.iter().copied().fold(0.0, f64::max);
+        assert_eq!(summary["peak_memory_mib"].as_f64(), Some(largest), "{each:?}");
     }
 
     /// Two runs of one case on the same ranks give the same numbers: `steps.csv` but its

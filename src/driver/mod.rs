@@ -231,7 +231,7 @@ pub fn run_observed(
             },
         };
         let (last, failure) = march(problem, &levels, first, &mut observers, &mut observer);
-        finish(last, failure, observers, files)
+        finish(last, failure, observers, (files, ranks))
     })
 }
 
@@ -294,7 +294,12 @@ fn march(
 /// The run's end at `last` (`failure`: the march stopped there): the frames still queued
 /// written, the files a run leaves ([`Files::close`]), the summary. The error that stopped the
 /// run comes back first; one met while recording it is logged.
-fn finish(last: State, mut failure: Option<Error>, o: Observers, files: Option<&Files>) -> Result<Run, Error> {
+fn finish(
+    last: State,
+    mut failure: Option<Error>,
+    o: Observers,
+    (files, ranks): (Option<&Files>, Option<Ranks>),
+) -> Result<Run, Error> {
     let Observers {
         mut recorder,
         progress,
@@ -313,6 +318,11 @@ fn finish(last: State, mut failure: Option<Error>, o: Observers, files: Option<&
     }
 
     recorder.count_work();
+    // Every rank of a distributed run ends here (a rank with an error of its own ends them all
+    // from `main`): they share their peak memory for the summary.
+    if let Some(ranks) = ranks {
+        recorder.ranks_peak_memory(ranks.each(crate::resources::peak_memory_mib().unwrap_or(0.0)));
+    }
     let status = RunStatus::of(failure.as_ref());
     let failure_record = failure.as_ref().map(|e| FailureRecord::new(e, &last));
     let written = match files {

@@ -105,6 +105,23 @@ impl Ranks {
 }
 
 impl Ranks {
+    /// Every rank's `value`, in rank order (collective: one sum over the ranks, each adding its
+    /// own entry; this rank's alone where the reduction fails).
+    pub fn each(&self, value: f64) -> Vec<f64> {
+        let mut values = vec![0.0; self.size];
+        values[self.rank] = value;
+        #[cfg(feature = "mpi")]
+        {
+            use crate::la::mpi::{Communicator, Reduction};
+            let mut summed = values.clone();
+            let reduced = Communicator::world().and_then(|comm| comm.all_reduce_f64(&mut summed, Reduction::Sum));
+            if reduced.is_ok() {
+                return summed;
+            }
+        }
+        values
+    }
+
     /// The largest `value` over the ranks (collective; this rank's where the reduction fails):
     /// the frames' seconds a run reports are its slowest rank's.
     pub fn max(&self, value: f64) -> f64 {

@@ -60,6 +60,9 @@ pub(super) struct Recorder<'a, 'p> {
     solves_before: usize,
     sweeps_before: usize,
     timings: Timings,
+    /// Each rank's peak memory, MiB, once the ranks of a distributed run have shared them at
+    /// its end ([`Recorder::ranks_peak_memory`]).
+    ranks_peak_memory: Option<Vec<f64>>,
     /// When the run started, when the march did, and when the step under way did.
     started: Instant,
     marching: Instant,
@@ -89,6 +92,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             sweeps_before: tally.sweeps,
             tally,
             timings,
+            ranks_peak_memory: None,
             started,
             marching: started,
             step_clock: started,
@@ -191,6 +195,11 @@ impl<'a, 'p> Recorder<'a, 'p> {
         self.tally.sweeps = self.sweeps_before + stats.sweeps;
     }
 
+    /// Each rank's peak memory (MiB, in rank order): the summary's is then the largest.
+    pub fn ranks_peak_memory(&mut self, peaks: Vec<f64>) {
+        self.ranks_peak_memory = Some(peaks);
+    }
+
     /// The output time the run waited for so far, and the total time.
     pub fn ended(&mut self, output: f64) {
         self.timings.output = output;
@@ -277,7 +286,11 @@ impl<'a, 'p> Recorder<'a, 'p> {
             linear_solves: tally.solve_equivalents(),
             full_sweeps: tally.full_sweeps(),
             factor_nnz: report.factor_nnz,
-            peak_memory_mib: crate::resources::peak_memory_mib(),
+            peak_memory_mib: match &self.ranks_peak_memory {
+                Some(peaks) => Some(peaks.iter().fold(0.0, |m: f64, &p| m.max(p))),
+                None => crate::resources::peak_memory_mib(),
+            },
+            peak_memory_per_rank_mib: self.ranks_peak_memory.clone(),
             max_law_residual: tally.max_law_residual,
             cutbacks: tally.cutbacks.clone(),
             status,

@@ -146,8 +146,13 @@ pub struct Summary {
     /// 0 otherwise).
     #[serde(skip_serializing_if = "is_zero")]
     pub pressure_iterations: usize,
-    /// Peak resident memory of the process at the end of the run (Linux), MiB.
+    /// Peak resident memory of the process at the end of the run (Linux), MiB; in a
+    /// distributed run, the largest rank's.
     pub peak_memory_mib: Option<f64>,
+    /// In a distributed run, each rank's peak resident memory (MiB, in rank order; 0 where it
+    /// could not be read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_memory_per_rank_mib: Option<Vec<f64>>,
     /// The largest residual of the nodal friction law (−ξ_i ∈ ∂j_τ(w_i): |ξ_i| ≤ μ(0)S at
     /// stick, ξ_i = −μ(|w_i|)S w_i/|w_i| at slip) over every completed step and Γ_C node,
     /// relative to μ(0)S: how well the returned states solve the discrete problem.
