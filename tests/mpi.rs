@@ -222,9 +222,10 @@ mod distributed {
             .iter()
             .map(|&j| if j == last { 4.0 / h } else { -2.0 / h })
             .collect();
-        matrix
-            .set_rows(&[last], &[0, neighbours.len()], &neighbours, &doubled)
+        let pattern = matrix
+            .row_pattern(&[last], &[0, neighbours.len()], &neighbours)
             .unwrap();
+        matrix.set_rows(&pattern, &doubled).unwrap();
         let (mut ptr, mut col, mut val) = (vec![0], vec![], vec![]);
         for i in owned.clone() {
             for j in [i.checked_sub(1), Some(i), Some(i + 1)].into_iter().flatten() {

@@ -425,6 +425,14 @@ pub struct DistributedMatrix {
     _storage: Option<Box<SplitStorage>>,
 }
 
+/// Rows of a [`DistributedMatrix`] and their entries, in PETSc's index types
+/// ([`DistributedMatrix::row_pattern`]).
+pub struct RowPattern {
+    rows: Vec<c_int>,
+    ptr: Vec<c_longlong>,
+    cols: Vec<c_int>,
+}
+
 /// A rank's rows as CSR: row pointers (from 0), columns ascending within each row, values.
 pub type CsrParts = (Vec<usize>, Vec<u32>, Vec<f64>);
 
@@ -541,9 +549,9 @@ impl DistributedMatrix {
     /// rank's first row) and the `off_diagonal` rest (global columns), each as CSR with its
     /// columns ascending within a row. PETSc keeps its values in these arrays, not in a copy
     /// (`MatCreateMPIAIJWithSplitArrays`): the matrix owns them; its pattern is fixed, its
-    /// values change by [`DistributedMatrix::set_rows`]. Measured at 972k unknowns on 2 ranks
-    /// (docs/distributed.md): 1.3–1.6 s and a copy of the rank's rows less than PETSc's CSR
-    /// preallocation, which inserts every row again.
+    /// values change by [`DistributedMatrix::set_rows`]. PETSc's CSR preallocation, which this
+    /// replaced, copied the rows and inserted every one again: 1.5 s of a rank's set-up at 972k
+    /// unknowns on 2 ranks, and a third copy of its rows at the peak (docs/distributed.md).
     pub fn from_split(comm: &Communicator, diagonal: CsrParts, off_diagonal: CsrParts) -> Result<Self, Error> {
         const OPERATION: &str = "MatCreateMPIAIJWithSplitArrays";
         let n_owned = diagonal.0.len().checked_sub(1).expect("n_owned + 1 offsets");
@@ -623,14 +631,13 @@ impl DistributedMatrix {
         Ok(())
     }
 
-    /// The values of some of this rank's rows, the others unchanged: row `rows[r]` (global,
-    /// owned) gets `values[ptr[r]..ptr[r + 1]]` at the columns `cols[ptr[r]..ptr[r + 1]]`
-    /// (global), every one an entry of the pattern. Collective (every rank calls it, with its
-    /// own rows or none). Where a linearization changes a few rows, this sends only those;
-    /// [`DistributedMatrix::set_values`] sends every value.
-    pub fn set_rows(&mut self, rows: &[usize], ptr: &[usize], cols: &[usize], values: &[f64]) -> Result<(), Error> {
+    /// Some of this rank's rows whose values [`DistributedMatrix::set_rows`] sets again and
+    /// again: row `rows[r]` (global, owned) with its entries at the columns
+    /// `cols[ptr[r]..ptr[r + 1]]` (global), every one an entry of the pattern. Checked and put in
+    /// PETSc's index types once, so that setting their values allocates nothing.
+    pub fn row_pattern(&self, rows: &[usize], ptr: &[usize], cols: &[usize]) -> Result<RowPattern, Error> {
         const OPERATION: &str = "MatSetValues";
-        assert!(ptr.len() == rows.len() + 1 && ptr.last() == Some(&cols.len()) && cols.len() == values.len());
+        assert!(ptr.len() == rows.len() + 1 && ptr.last() == Some(&cols.len()));
         if let Some(&row) = rows.iter().find(|&&row| !self.owned.contains(&row)) {
             return Err(Error::Petsc {
                 operation: OPERATION,
@@ -643,18 +650,30 @@ impl DistributedMatrix {
                 detail: format!("column {col} in a matrix of {} columns", self.n_global),
             });
         }
-        let rows32: Vec<c_int> = rows.iter().map(|&i| i as c_int).collect();
-        let ptr64: Vec<c_longlong> = ptr.iter().map(|&p| p as c_longlong).collect();
-        let cols32: Vec<c_int> = cols.iter().map(|&j| j as c_int).collect();
+        index32(OPERATION, rows.len())?;
+        Ok(RowPattern {
+            rows: rows.iter().map(|&i| i as c_int).collect(),
+            ptr: ptr.iter().map(|&p| p as c_longlong).collect(),
+            cols: cols.iter().map(|&j| j as c_int).collect(),
+        })
+    }
+
+    /// The values of the rows of `pattern` (its entries' values in its order), the others
+    /// unchanged. Collective (every rank calls it, with its own rows or none). Where a
+    /// linearization changes a few rows, this sends only those; [`DistributedMatrix::set_values`]
+    /// sends every value.
+    pub fn set_rows(&mut self, pattern: &RowPattern, values: &[f64]) -> Result<(), Error> {
+        assert_eq!(values.len(), pattern.cols.len(), "one value per entry of the pattern");
         let _petsc = petsc_lock();
-        // SAFETY: a live handle; checked CSR arrays of rows.len() rows.
-        check(OPERATION, unsafe {
+        // SAFETY: a live handle; a pattern checked against this matrix's rows and columns, and
+        // its values.
+        check("MatSetValues", unsafe {
             tc_dist_set_rows(
                 self.handle.as_ptr(),
-                index32(OPERATION, rows.len())?,
-                rows32.as_ptr(),
-                ptr64.as_ptr(),
-                cols32.as_ptr(),
+                pattern.rows.len() as c_int,
+                pattern.rows.as_ptr(),
+                pattern.ptr.as_ptr(),
+                pattern.cols.as_ptr(),
                 values.as_ptr(),
             )
         })

@@ -34,7 +34,9 @@
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
 
-use crate::la::mpi::{Communicator, CsrParts, DistributedKrylov, DistributedMatrix, DistributedPreconditioner};
+use crate::la::mpi::{
+    Communicator, CsrParts, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, RowPattern,
+};
 use crate::la::{CsrMatrix, Ilu0, LaError, Preconditioner, SolveInfo};
 use crate::model::{node_unknowns, Problem};
 use crate::partition::DofLayout;
@@ -53,6 +55,18 @@ pub(crate) struct RankKrylov {
     block: Option<Box<RankBlock>>,
     /// The first row of Ã (the system's order) that a linearization changes.
     first_changing: usize,
+    /// This rank's rows that a linearization changes, as PETSc's matrix gets them.
+    changing: Box<ChangingRows>,
+}
+
+/// A rank's rows of Ã that a linearization changes (its last, in the system's order): their
+/// pattern in PETSc's matrix, prepared once, and their values, gathered from Ã at each
+/// linearization into one buffer.
+struct ChangingRows {
+    /// The first of them, by its index among the rank's rows.
+    first: usize,
+    pattern: RowPattern,
+    values: Vec<f64>,
 }
 
 /// The ILU(0) of this rank's diagonal block of Ã (its owned rows and columns, in the system's
@@ -217,19 +231,32 @@ impl RankKrylov {
         params: DistributedKrylov,
     ) -> Result<(Self, CsrMatrix), LaError> {
         let comm = Communicator::world()?;
+        // This rank's first changing row, by its index among the rank's rows.
+        let first = rows.owned.partition_point(|&row| row < first_changing);
         let (diagonal, off_diagonal, value_of_entry) = rows.split(&a, first_changing);
         let n_entries = diagonal.1.len() + off_diagonal.1.len();
         let a = a.keep_rows_from(first_changing);
         let (diagonal, block) = match params.preconditioner {
             DistributedPreconditioner::BlockJacobiShell => {
                 let block = CsrMatrix::from_rows(rows.owned.len(), diagonal.0, diagonal.1, diagonal.2);
-                let first = rows.owned.partition_point(|&row| row < first_changing);
                 let factored = RankBlock::new(&block, first, value_of_entry)?;
                 (block.into_parts(), Some(Box::new(factored)))
             }
             _ => (diagonal, None),
         };
         let matrix = DistributedMatrix::from_split(&comm, diagonal, off_diagonal)?;
+        let changing = &rows.owned[first..];
+        let (mut ptr, mut cols) = (vec![0], Vec::new());
+        for &row in changing {
+            cols.extend(a.row(row).0.iter().map(|&c| rows.global_of_row[c as usize]));
+            ptr.push(cols.len());
+        }
+        let globals: Vec<usize> = changing.iter().map(|&row| rows.global_of_row[row]).collect();
+        let changing = Box::new(ChangingRows {
+            first,
+            pattern: matrix.row_pattern(&globals, &ptr, &cols)?,
+            values: Vec::with_capacity(cols.len()),
+        });
         let solver = RankKrylov {
             matrix,
             rows,
@@ -237,43 +264,36 @@ impl RankKrylov {
             n_entries,
             block,
             first_changing,
+            changing,
         };
         Ok((solver, a))
     }
 
     /// Ã's values into PETSc's matrix (this rank's rows), and into this rank's block, whose
     /// rows from Ã's row `first_changed` on are refactored; collective. Only rows from
-    /// `first_changing` on change after set-up (A's rows are fixed per step size).
+    /// `first_changing` on change after set-up (A's rows are fixed per step size): those are
+    /// the rows set again.
     pub(crate) fn set_matrix(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
         debug_assert!(
             first_changed >= self.first_changing,
             "a row before the changing ones changed"
         );
-        let first = self
-            .rows
-            .owned
-            .partition_point(|&row| row < first_changed.max(self.first_changing));
-        self.set_rows_from(a, first)?;
+        self.set_changing_rows(a)?;
         match &mut self.block {
             Some(block) => block.update(a, self.first_changing),
             None => Ok(()),
         }
     }
 
-    /// This rank's rows of Ã from its `first` owned row on (in the system's order, so the rows
-    /// a linearization changes are a rank's last) into PETSc's matrix; collective.
-    fn set_rows_from(&mut self, a: &CsrMatrix, first: usize) -> Result<(), LaError> {
-        let rows = &self.rows.owned[first..];
-        let start = self.matrix.owned().start + first;
-        let (mut ptr, mut cols, mut values) = (vec![0], Vec::new(), Vec::new());
-        for &row in rows {
-            let (c, v) = a.row(row);
-            cols.extend(c.iter().map(|&c| self.rows.global_of_row[c as usize]));
-            values.extend_from_slice(v);
-            ptr.push(cols.len());
+    /// The values of this rank's rows of Ã that a linearization changes (its last, in the
+    /// system's order) into PETSc's matrix, through the pattern set up once; collective.
+    fn set_changing_rows(&mut self, a: &CsrMatrix) -> Result<(), LaError> {
+        let ChangingRows { first, pattern, values } = &mut *self.changing;
+        values.clear();
+        for &row in &self.rows.owned[*first..] {
+            values.extend_from_slice(a.row(row).1);
         }
-        let globals: Vec<usize> = (start..start + rows.len()).collect();
-        self.matrix.set_rows(&globals, &ptr, &cols, &values)
+        self.matrix.set_rows(pattern, values)
     }
 
     /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x whole, in the system's order, the same
