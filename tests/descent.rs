@@ -183,7 +183,7 @@ fn the_descent_finishes_the_steps_the_convexification_loop_cannot() {
 
     let (_, reference) = coarse(&[]).run_quiet().unwrap();
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
-    let m = &problem.matrices;
+    let m = &problem.mesh;
     let du = norms::energy(m, &diff(&run.state.u, &reference.u)) / norms::energy(m, &reference.u);
     assert!(du < 1e-5, "displacements differ from the unstarved run: {du:e}");
 }

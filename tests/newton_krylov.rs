@@ -29,7 +29,7 @@ fn compare(file: Option<&str>, overrides: &[&str]) -> Summary {
     assert_eq!(iterative_summary.linear, "iterative");
     assert!(iterative_summary.krylov_iterations > 0);
     let problem = load(file, overrides, "direct").build().unwrap();
-    let m = &problem.matrices;
+    let m = &problem.mesh;
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
     let du = norms::energy(m, &diff(&direct.u, &iterative.u)) / norms::energy(m, &direct.u);
     let dtheta = norms::gradient(m, &diff(&direct.theta, &iterative.theta)) / norms::gradient(m, &direct.theta);

@@ -14,7 +14,7 @@ fn compare(file: Option<&str>, overrides: &[&str]) {
     let (fast_summary, fast) = load("fast").run_quiet().unwrap();
     let problem = load("paper").build().unwrap();
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
-    let m = &problem.matrices;
+    let m = &problem.mesh;
     // The paper's solver stops at relative increments ε_conv = 1e-6 (77)–(80); both solutions
     // must agree to a small multiple of it.
     let du = norms::energy(m, &diff(&paper.u, &fast.u)) / norms::energy(m, &paper.u);

@@ -75,7 +75,7 @@ pub fn record(problem: &Problem, state: &State, slip_tolerance: f64) -> OutputRe
         min_temperature: state.theta.iter().cloned().fold(f64::INFINITY, f64::min),
         max_temperature: state.theta.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         max_displacement,
-        energy_norm_u: crate::model::norms::energy(&problem.matrices, &state.u),
+        energy_norm_u: crate::model::norms::energy(&problem.mesh, &state.u),
         contact,
     }
 }

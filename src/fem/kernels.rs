@@ -115,6 +115,40 @@ pub fn divergence_coupling_column(t: &Simplex, _b: usize) -> [f64; 12] {
     m
 }
 
+/// ∫_T ε(v) : ε(v) for the P1 field with nodal values `v[a]` (components beyond d unused): ε is
+/// constant on T, ε_ij = ½ Σ_a (v_a,i ∂_j λ_a + v_a,j ∂_i λ_a).
+pub fn strain_squared(t: &Simplex, v: &[[f64; 3]; 4]) -> f64 {
+    let d = t.dim;
+    let mut grad = [[0.0; 3]; 3]; // ∂_j v_i
+    for (a, va) in v.iter().enumerate().take(d + 1) {
+        for i in 0..d {
+            for j in 0..d {
+                grad[i][j] += va[i] * t.grads[a][j];
+            }
+        }
+    }
+    let mut sum = 0.0;
+    for i in 0..d {
+        for j in 0..d {
+            let e = 0.5 * (grad[i][j] + grad[j][i]);
+            sum += e * e;
+        }
+    }
+    t.measure * sum
+}
+
+/// ∫_T |∇θ|² for the P1 field with nodal values `theta[a]`.
+pub fn gradient_squared(t: &Simplex, theta: &[f64; 4]) -> f64 {
+    let d = t.dim;
+    let mut grad = [0.0; 3];
+    for (a, &value) in theta.iter().enumerate().take(d + 1) {
+        for (g, &da) in grad.iter_mut().zip(&t.grads[a]).take(d) {
+            *g += value * da;
+        }
+    }
+    t.measure * grad[..d].iter().map(|g| g * g).sum::<f64>()
+}
+
 /// ∫_F λ_a λ_b on a boundary facet with `n` = d vertices and measure `measure`.
 pub fn facet_mass(n: usize, measure: f64) -> [[f64; 3]; 3] {
     let scale = measure / ((n * (n + 1)) as f64);

@@ -1,21 +1,24 @@
 //! The norms of the stop criteria (77)–(80) and of the error estimate (73).
 //!
-//! ‖v‖_E = ‖ε(v)‖_L², ‖θ‖_V = ‖∇θ‖_L² (exact for P1 through their Gram matrices); on Γ_C the
+//! ‖v‖_E = ‖ε(v)‖_L², ‖θ‖_V = ‖∇θ‖_L², exact for P1: sums over the cells ([`energy`],
+//! [`gradient`]; outputs, studies), or the quadratic forms of their Gram matrices where a solver
+//! evaluates them at every iterate ([`relative_increments`] of the paper's solver); on Γ_C the
 //! nodal fields ξ and ζ use the same nodal quadrature as the contact terms:
 //! ‖ξ‖²_L²(ΓC) ≈ Σ_i ℓ_i |ξ_i|².
 
 use super::problem::Problem;
 use super::state::State;
-use crate::fem::assembly::Matrices;
+use crate::fem::assembly::{gradient_norm, strain_norm, NormGrams};
+use crate::mesh::Mesh;
 
 /// ‖ε(v)‖_L² of a full nodal vector field.
-pub fn energy(matrices: &Matrices, v: &[f64]) -> f64 {
-    matrices.energy_gram.quadratic_form(v).max(0.0).sqrt()
+pub fn energy(mesh: &Mesh, v: &[f64]) -> f64 {
+    strain_norm(mesh, v)
 }
 
 /// ‖∇θ‖_L² of a full nodal scalar field.
-pub fn gradient(matrices: &Matrices, theta: &[f64]) -> f64 {
-    matrices.gradient_gram.quadratic_form(theta).max(0.0).sqrt()
+pub fn gradient(mesh: &Mesh, theta: &[f64]) -> f64 {
+    gradient_norm(mesh, theta)
 }
 
 /// L²(Γ_C) norm of a nodal field on the frictional contact nodes: `field` node-major with the
@@ -51,8 +54,9 @@ pub fn heat_exchange_multiplier(problem: &Problem, t: f64, theta: &[f64]) -> Vec
         .collect()
 }
 
-/// Relative increments (77)–(80) between two iterates of one time step.
-pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64; 4] {
+/// Relative increments (77)–(80) between two iterates of one time step, the E- and V-norms by
+/// `grams` (of `problem`'s mesh).
+pub fn relative_increments(problem: &Problem, grams: &NormGrams, old: &State, new: &State) -> [f64; 4] {
     let diff = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
     let ratio = |num: f64, den: f64| {
         if num == 0.0 {
@@ -63,17 +67,16 @@ pub fn relative_increments(problem: &Problem, old: &State, new: &State) -> [f64;
             num / den
         }
     };
-    let m = &problem.matrices;
-    let du = energy(m, &diff(&new.u, &old.u));
-    let dtheta = gradient(m, &diff(&new.theta, &old.theta));
+    let du = grams.strain_norm(&diff(&new.u, &old.u));
+    let dtheta = grams.gradient_norm(&diff(&new.theta, &old.theta));
     let dxi = contact_l2(problem, &diff(&new.xi, &old.xi));
     let zeta_new = heat_exchange_multiplier(problem, new.t, &new.theta);
     let zeta_old = heat_exchange_multiplier(problem, old.t, &old.theta);
     let zeta_diff = diff(&zeta_new, &zeta_old);
     let zeta_ref = zeta_old;
     [
-        ratio(du, energy(m, &old.u)),
-        ratio(dtheta, gradient(m, &old.theta)),
+        ratio(du, grams.strain_norm(&old.u)),
+        ratio(dtheta, grams.gradient_norm(&old.theta)),
         ratio(dxi, contact_l2(problem, &old.xi)),
         ratio(contact_l2(problem, &zeta_diff), contact_l2(problem, &zeta_ref)),
     ]

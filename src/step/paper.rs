@@ -23,6 +23,7 @@ use super::direct::StepSystem;
 use super::StepError as Error;
 use super::{Criterion, SolveError, StepFailure, StepInfo};
 use crate::contact::project_to_ball;
+use crate::fem::assembly::NormGrams;
 use crate::la::vector::norm2;
 use crate::model::norms::relative_increments;
 use crate::model::Problem;
@@ -44,6 +45,8 @@ pub struct PaperParams {
 /// The convexification + augmented-Lagrangian solver.
 pub struct PaperSolver<'a> {
     problem: &'a Problem,
+    /// The norms of the stop criteria (77)–(78), evaluated at every iterate.
+    grams: NormGrams,
     system: StepSystem,
     condensation: Condensation,
     params: PaperParams,
@@ -66,6 +69,7 @@ impl<'a> PaperSolver<'a> {
         let augmentation = if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 };
         Ok(PaperSolver {
             problem,
+            grams: NormGrams::assemble(&problem.mesh),
             system,
             condensation,
             params,
@@ -105,7 +109,7 @@ impl<'a> PaperSolver<'a> {
         };
         let k = self.system.time_step();
         paper_step(
-            self.problem,
+            (self.problem, &self.grams),
             &self.params,
             self.augmentation,
             "paper",
@@ -155,7 +159,7 @@ impl LoadedStep for CondensedStep<'_, '_> {
 /// convexification ([`convexify`]) around Uzawa iterations with the augmentation r, on
 /// whatever answers the loaded step.
 pub(super) fn paper_step(
-    problem: &Problem,
+    (problem, grams): (&Problem, &NormGrams),
     params: &PaperParams,
     augmentation: f64,
     solver: &'static str,
@@ -179,6 +183,7 @@ pub(super) fn paper_step(
     };
     let mut uzawa = Uzawa {
         problem,
+        grams,
         params,
         augmentation,
         solver,
@@ -206,6 +211,8 @@ struct PaperIterate {
 /// The convex problems of the paper's loop, solved by Uzawa iterations on ξ over a loaded step.
 struct Uzawa<'p, S> {
     problem: &'p Problem,
+    /// The E- and V-norms of (77)–(78).
+    grams: &'p NormGrams,
     params: &'p PaperParams,
     augmentation: f64,
     solver: &'static str,
@@ -280,7 +287,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
         self.step.velocities(xi, heat, w)?;
         laws.make_relative(w);
         let next = self.step.state(xi.clone(), heat)?;
-        let increments = relative_increments(problem, state, &next);
+        let increments = relative_increments(problem, self.grams, state, &next);
         info.increments = increments;
         *state = next;
         let criteria = [

@@ -19,6 +19,7 @@ use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::paper::{paper_step, LoadedStep, PaperParams};
 use super::StepError as Error;
 use super::{SolveError, StepInfo};
+use crate::fem::assembly::NormGrams;
 use crate::la::vector::largest_eigenvalue_within;
 use crate::la::CsrMatrix;
 use crate::model::Problem;
@@ -27,6 +28,8 @@ use crate::model::{ContactLaws, State};
 /// The paper's solver on a [`KrylovSystem`].
 pub struct PaperKrylov<'a> {
     problem: &'a Problem,
+    /// The norms of the stop criteria (77)–(78), evaluated at every iterate.
+    grams: NormGrams,
     system: KrylovSystem,
     params: PaperParams,
     /// The Uzawa step r = 1/λ_max(C).
@@ -45,6 +48,7 @@ impl<'a> PaperKrylov<'a> {
         let lambda_max = spectral_bound(problem, &system)?;
         Ok(PaperKrylov {
             problem,
+            grams: NormGrams::assemble(&problem.mesh),
             system,
             params,
             augmentation: if lambda_max > 0.0 { 1.0 / lambda_max } else { 1.0 },
@@ -80,7 +84,7 @@ impl<'a> PaperKrylov<'a> {
         };
         let k = sys.time_step();
         let (state, mut info) = paper_step(
-            problem,
+            (problem, &self.grams),
             &self.params,
             self.augmentation,
             "paper",

@@ -7,9 +7,9 @@
 //! with ‖v‖_E = ‖ε(v)‖_L², ‖·‖_H = ‖·‖_L²(Ω;ℝ^d) and ‖η‖_V = ‖∇η‖_L². Two ways to measure them:
 //!
 //! * against a finer discrete solution (self-convergence, Fig. 4): the coarse fields are
-//!   prolonged exactly ([`super::nested`]) and the differences measured with the fine Gram
-//!   matrices — (ε(u), ε(v)), (∇θ, ∇η) and the consistent masses divided by ρ and ρc_p — which is
-//!   exact for P1 fields;
+//!   prolonged exactly ([`super::nested`]) and the differences measured on the fine mesh —
+//!   ‖ε(u)‖ and ‖∇θ‖ by sums over its cells, the L² norms by its consistent masses divided by ρ
+//!   and ρc_p — which is exact for P1 fields;
 //! * against an exact solution ([`ExactSolution`]): the true error, integrated on every cell with
 //!   the degree-5 rule of [`super::quadrature`] (ε(u^{hk}) and ∇θ^{hk} are constant per cell).
 //!
@@ -37,7 +37,7 @@ pub struct LevelErrors {
 }
 
 /// Errors between two discrete states on the same mesh (the coarse one already prolonged):
-/// exact norms of P1 fields through the Gram matrices of `problem`. The L² norms divide ℳ and
+/// exact norms of P1 fields on the mesh of `problem` (cell sums, and its mass matrices). The L² norms divide ℳ and
 /// ℳ_θ by the body's ρ and ρ c_p: exact for a body of one material (the verification family's);
 /// with cell regions of other densities they are weighted by ρ_cell/ρ.
 pub fn discrete_errors(problem: &Problem, u: &[f64], w: &[f64], theta: &[f64], reference: &State) -> LevelErrors {
@@ -51,10 +51,10 @@ pub fn discrete_errors(problem: &Problem, u: &[f64], w: &[f64], theta: &[f64], r
     let rho = problem.material.density;
     let rho_cp = rho * problem.material.heat_capacity;
     LevelErrors {
-        u_energy: crate::model::norms::energy(m, &du),
+        u_energy: crate::model::norms::energy(&problem.mesh, &du),
         w_l2: (m.mass.quadratic_form(&dw) / rho).max(0.0).sqrt(),
         theta_l2: (m.heat_mass.quadratic_form(&dtheta) / rho_cp).max(0.0).sqrt(),
-        theta_v: crate::model::norms::gradient(m, &dtheta),
+        theta_v: crate::model::norms::gradient(&problem.mesh, &dtheta),
     }
 }
 

@@ -3,7 +3,7 @@
 //! ‖u − u^{hk}‖ ≤ c(h + k).
 //!
 //! * [`nested`]: exact P1 prolongation between nested rectangle meshes;
-//! * [`errors`]: the norms of (73), between discrete solutions (Gram matrices) or against an
+//! * [`errors`]: the norms of (73), between discrete solutions (exact P1 norms) or against an
 //!   exact solution (quadrature);
 //! * [`manufactured`]: the exact solution family and the loads it needs ([`crate::model::ExtraLoads`]);
 //! * [`jet`], [`quadrature`]: exact derivatives of the formulas, and the rules that integrate them;

@@ -9,7 +9,7 @@
 //! (P v)(x_q) = Σ_a λ_a(x_q) v(x_a)     (x_a the vertices of the coarse triangle holding x_q),
 //! ```
 //!
-//! so errors measured on the fine mesh with the fine Gram matrices are exact norms of the
+//! so errors measured on the fine mesh are exact norms of the
 //! difference of the two P1 fields.
 
 use crate::error::Error;
@@ -144,7 +144,7 @@ mod tests {
     }
 
     /// A coarse P1 field and its prolongation are the same function: the fine nodal values at
-    /// coarse nodes are copied, and the E-norm and V-norm (exact through the Gram matrices) agree.
+    /// coarse nodes are copied, and the E-norm and V-norm (exact cell sums) agree.
     #[test]
     fn prolongation_preserves_p1_fields_and_their_norms() {
         let (coarse, fine) = (problem(8, 2), problem(24, 6));
@@ -154,14 +154,14 @@ mod tests {
             .collect();
         let prolonged = p.apply(&field, 2);
         let (ne, nf) = (
-            crate::model::norms::energy(&coarse.matrices, &field),
-            crate::model::norms::energy(&fine.matrices, &prolonged),
+            crate::model::norms::energy(&coarse.mesh, &field),
+            crate::model::norms::energy(&fine.mesh, &prolonged),
         );
         assert!((ne - nf).abs() < 1e-12 * ne, "{ne} vs {nf}");
         let theta: Vec<f64> = field.iter().step_by(2).cloned().collect();
         let (gc, gf) = (
-            crate::model::norms::gradient(&coarse.matrices, &theta),
-            crate::model::norms::gradient(&fine.matrices, &p.apply(&theta, 1)),
+            crate::model::norms::gradient(&coarse.mesh, &theta),
+            crate::model::norms::gradient(&fine.mesh, &p.apply(&theta, 1)),
         );
         assert!((gc - gf).abs() < 1e-12 * gc);
         // Coarse node (i, j) is fine node (3i, 3j).
