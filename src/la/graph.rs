@@ -65,7 +65,7 @@ impl NodeGraph {
         assert_eq!(matrix.n_rows, matrix.n_cols, "one row and one column per node");
         NodeGraph {
             ptr: matrix.col_ptr.to_vec(),
-            adj: matrix.row_idx.to_vec(),
+            adj: matrix.row_idx.iter().map(|&r| r as usize).collect(),
         }
     }
 

@@ -495,7 +495,7 @@ fn constrained_amd(s: &CscMatrix, last: &[bool], tail: &[usize]) -> Result<Vec<u
     col_ptr.push(0);
     for &j in &rest {
         for k in s.col_ptr[j]..s.col_ptr[j + 1] {
-            let r = local[s.row_idx[k]];
+            let r = local[s.row_idx[k] as usize];
             if r != usize::MAX {
                 row_idx.push(r);
             }

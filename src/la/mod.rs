@@ -33,4 +33,4 @@ pub use gmres::{gmres, gmres_from_residual, GmresParams, Preconditioner, SolveIn
 pub use graph::{level_bisection, NodeCells, NodeGraph, Part};
 pub use ilu::Ilu0;
 pub use ldlt::QuasiDefiniteLdlt;
-pub use sparse::{ColumnsMut, CscMatrix, CsrMatrix};
+pub use sparse::{row_index, ColumnsMut, CscMatrix, CsrMatrix};

@@ -23,8 +23,17 @@ pub struct CscMatrix {
     pub n_rows: usize,
     pub n_cols: usize,
     pub col_ptr: Arc<[usize]>,
-    pub row_idx: Arc<[usize]>,
+    /// 32-bit row indices: 4 bytes per entry less than `usize` (0.25 GB at 972k unknowns in 3D;
+    /// a matrix with 2³² rows would not fit in memory here anyway, see [`row_index`]).
+    pub row_idx: Arc<[u32]>,
     pub values: Vec<f64>,
+}
+
+/// Row r as a stored index: rows must fit in 32 bits (2³² rows of a P1 matrix in 3D would take
+/// over 10¹² bytes of values).
+#[inline]
+pub fn row_index(r: usize) -> u32 {
+    u32::try_from(r).expect("a matrix with fewer than 2³² rows")
 }
 
 impl CscMatrix {
@@ -44,10 +53,10 @@ impl CscMatrix {
         }
         let nnz = col_ptr[col_ptr.len() - 1];
         // The row indices are written once, into the shared slice itself: collected from an
-        // iterator of known length, not from a `Vec` (which an `Arc<[usize]>` copies: 0.27 GB
-        // more written at 10⁶ unknowns).
+        // iterator of known length, not from a `Vec` (which an `Arc<[_]>` copies: 0.27 GB
+        // more written at 10⁶ unknowns with `usize` indices).
         let (mut q, mut j, mut k, mut i) = (0, 0, 0, 0);
-        let row_idx: Arc<[usize]> = (0..nnz)
+        let row_idx: Arc<[u32]> = (0..nnz)
             .map(|_| {
                 while k == graph.neighbours(q).len() {
                     k = 0;
@@ -61,7 +70,7 @@ impl CscMatrix {
                 if i == rows_per_node {
                     (i, k) = (0, k + 1);
                 }
-                row
+                row_index(row)
             })
             .collect();
         CscMatrix {
@@ -96,7 +105,7 @@ impl CscMatrix {
             if last == Some((r, c)) {
                 *values.last_mut().expect("a previous entry exists") += v;
             } else {
-                row_idx.push(r);
+                row_idx.push(row_index(r));
                 values.push(v);
                 col_ptr[c + 1] += 1;
                 last = Some((r, c));
@@ -122,6 +131,7 @@ impl CscMatrix {
     /// Position of entry (row, col) in `values`, if it is in the pattern.
     pub fn position(&self, row: usize, col: usize) -> Option<usize> {
         let (start, end) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        let row = u32::try_from(row).ok()?;
         self.row_idx[start..end].binary_search(&row).ok().map(|k| start + k)
     }
 
@@ -171,7 +181,7 @@ impl CscMatrix {
             }
             let ax = alpha * xc;
             for k in self.col_ptr[c]..self.col_ptr[c + 1] {
-                y[self.row_idx[k]] += self.values[k] * ax;
+                y[self.row_idx[k] as usize] += self.values[k] * ax;
             }
         }
     }
@@ -183,7 +193,7 @@ impl CscMatrix {
         for (c, yc) in y.iter_mut().enumerate() {
             let mut sum = 0.0;
             for k in self.col_ptr[c]..self.col_ptr[c + 1] {
-                sum += self.values[k] * x[self.row_idx[k]];
+                sum += self.values[k] * x[self.row_idx[k] as usize];
             }
             *yc += alpha * sum;
         }
@@ -204,7 +214,7 @@ impl CscMatrix {
     /// Triplets of the stored entries.
     pub fn triplets(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
         (0..self.n_cols).flat_map(move |c| {
-            (self.col_ptr[c]..self.col_ptr[c + 1]).map(move |k| (self.row_idx[k], c, self.values[k]))
+            (self.col_ptr[c]..self.col_ptr[c + 1]).map(move |k| (self.row_idx[k] as usize, c, self.values[k]))
         })
     }
 
@@ -217,7 +227,7 @@ impl CscMatrix {
             self.n_cols,
             self.col_ptr.to_vec(),
             None,
-            self.row_idx.to_vec(),
+            self.row_idx.iter().map(|&r| r as usize).collect(),
         );
         SparseColMat::new(symbolic, self.values.clone())
     }

@@ -384,7 +384,7 @@ fn column_forms<const G: usize, const F: usize>(
             let mut column = [0.0; G];
             for (k, &r) in (col_ptr[c]..col_ptr[c + 1]).zip(&row_idx[col_ptr[c]..col_ptr[c + 1]]) {
                 for (s, (values, y)) in column.iter_mut().zip(&gathers) {
-                    *s += values[k] * y[r];
+                    *s += values[k] * y[r as usize];
                 }
             }
             for (sum, &(g, x)) in sums.iter_mut().zip(&forms) {
@@ -416,7 +416,7 @@ fn heat_products(mats: &Matrices, theta: &[f64], dtheta: &[f64]) -> [Vec<f64>; 3
     let [m_theta, m_dtheta, c_theta] = &mut out;
     for (col, (&t, &dt)) in theta.iter().zip(dtheta).enumerate() {
         for k in m.col_ptr[col]..m.col_ptr[col + 1] {
-            let r = m.row_idx[k];
+            let r = m.row_idx[k] as usize;
             m_theta[r] += m.values[k] * t;
             m_dtheta[r] += m.values[k] * dt;
             c_theta[r] += c.values[k] * t;

@@ -65,7 +65,7 @@ impl ContactPressure {
                 for (m, matrix) in symmetric.iter().enumerate() {
                     let range = matrix.col_ptr[dof]..matrix.col_ptr[dof + 1];
                     for k in range {
-                        velocity.entry(matrix.row_idx[k]).or_default()[m] += node.normal[c] * matrix.values[k];
+                        velocity.entry(matrix.row_idx[k] as usize).or_default()[m] += node.normal[c] * matrix.values[k];
                     }
                 }
             }

@@ -59,7 +59,7 @@ impl StepMatrix {
         col_ptr.push(0);
         let identity: Vec<usize> = (0..n).collect();
         let rhs = assemble_by_columns(problem, k, &identity, |column| {
-            row_idx.extend(column.iter().map(|&(r, _)| r));
+            row_idx.extend(column.iter().map(|&(r, _)| crate::la::row_index(r)));
             values.extend(column.iter().map(|&(_, v)| v));
             col_ptr.push(row_idx.len());
         });
@@ -378,7 +378,7 @@ impl<'p> ColumnSource<'p> {
 
     /// The neighbours of a node in the node graph (itself included), sorted: the pattern of
     /// ℳ_θ, whose node pairs are those of every assembled matrix.
-    fn neighbours(&self, node: usize) -> &[usize] {
+    fn neighbours(&self, node: usize) -> &[u32] {
         let graph = &self.problem.matrices.heat_mass;
         &graph.row_idx[graph.col_ptr[node]..graph.col_ptr[node + 1]]
     }
@@ -389,7 +389,7 @@ impl<'p> ColumnSource<'p> {
     /// in its support: the column reaches each of them, and no other unknown.
     fn column_len(&self, c: usize) -> usize {
         (self.neighbours(self.node_of_unknown(c)).iter())
-            .map(|&q| self.unknowns_at[q])
+            .map(|&q| self.unknowns_at[q as usize])
             .sum()
     }
 
@@ -398,8 +398,10 @@ impl<'p> ColumnSource<'p> {
     fn node_pattern(&self, node: usize, pattern: &mut [u32]) {
         let (vel, temp) = (&self.problem.velocity, &self.problem.temperature);
         let n_w = vel.n_free;
-        let unknowns =
-            (self.neighbours(node).iter()).flat_map(|&q| vel.node_unknowns(q).chain(temp.free[q].map(|r| n_w + r)));
+        let unknowns = (self.neighbours(node).iter()).flat_map(|&q| {
+            let q = q as usize;
+            vel.node_unknowns(q).chain(temp.free[q].map(|r| n_w + r))
+        });
         let mut filled = 0;
         for (slot, r) in pattern.iter_mut().zip(unknowns) {
             *slot = index32(self.position[r]);
@@ -432,7 +434,7 @@ impl<'p> ColumnSource<'p> {
         let d = self.problem.velocity.dim;
         let (p, j) = (f / d, f % d);
         (graph.col_ptr[p]..graph.col_ptr[p + 1]).map(move |t| {
-            let q = graph.row_idx[t];
+            let q = graph.row_idx[t] as usize;
             let place = self.mirror[t] as usize - graph.col_ptr[q];
             (q, coupling.values[coupling.col_ptr[q] + place * d + j])
         })
@@ -451,7 +453,7 @@ impl<'p> ColumnSource<'p> {
             for &(f, b) in &self.full_entries[self.full_ptr[c]..self.full_ptr[c + 1]] {
                 for idx in mass.col_ptr[f]..mass.col_ptr[f + 1] {
                     let value = mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
-                    for &(r, a) in vel.row(mass.row_idx[idx]) {
+                    for &(r, a) in vel.row(mass.row_idx[idx] as usize) {
                         add(position[r], a * b * value);
                     }
                 }
@@ -466,12 +468,12 @@ impl<'p> ColumnSource<'p> {
             let q = self.node_of[c - n_w];
             let range = coupling.col_ptr[q]..coupling.col_ptr[q + 1];
             for (row, g) in coupling.row_idx[range.clone()].iter().zip(&coupling.values[range]) {
-                for &(r, a) in vel.row(*row) {
+                for &(r, a) in vel.row(*row as usize) {
                     add(position[r], a * g);
                 }
             }
             for idx in heat_mass.col_ptr[q]..heat_mass.col_ptr[q + 1] {
-                if let Some(r) = temp.free[heat_mass.row_idx[idx]] {
+                if let Some(r) = temp.free[heat_mass.row_idx[idx] as usize] {
                     let value = heat_mass.values[idx] / k + mats.conduction.values[idx];
                     add(position[n_w + r], -value);
                 }
@@ -595,12 +597,7 @@ pub fn rows_of_symmetric_form(s: &CscMatrix, n_w: usize) -> CsrMatrix {
             *v = -*v;
         }
     }
-    CsrMatrix::from_rows(
-        s.n_rows,
-        s.col_ptr.to_vec(),
-        s.row_idx.iter().map(|&r| index32(r)).collect(),
-        val,
-    )
+    CsrMatrix::from_rows(s.n_rows, s.col_ptr.to_vec(), s.row_idx.to_vec(), val)
 }
 
 /// P A Pᵀ of A = J S (as [`rows_of_symmetric_form`]) for the ordering `order`:
@@ -629,7 +626,7 @@ pub fn rows_of_symmetric_form_ordered(s: &CscMatrix, n_w: usize, order: &[usize]
             s.row_idx[range.clone()]
                 .iter()
                 .zip(&s.values[range])
-                .map(|(&c, &v)| (position[c], sign * v)),
+                .map(|(&c, &v)| (position[c as usize], sign * v)),
         );
         row.sort_unstable_by_key(|&(c, _)| c);
         col.extend(row.iter().map(|&(c, _)| index32(c)));
@@ -667,7 +664,7 @@ fn mirrors(matrix: &CscMatrix) -> Vec<u32> {
     let mut next: Vec<usize> = matrix.col_ptr[..matrix.n_cols].to_vec();
     for q in 0..matrix.n_cols {
         for t in matrix.col_ptr[q]..matrix.col_ptr[q + 1] {
-            let p = matrix.row_idx[t];
+            let p = matrix.row_idx[t] as usize;
             mirror[next[p]] = index32(t);
             next[p] += 1;
         }
