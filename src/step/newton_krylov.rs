@@ -92,13 +92,26 @@
 //!   3 at 47k and k = 1/8 (its criteria repeating with a period of about 6 for 200 iterates)
 //!   stays, 391 Newton iterations instead of 262 and the same cutback, as it does with the
 //!   frictional heat off: the loop (a majorize–minimize method for the energy of
-//!   [`super::descent`]) descends along a flat valley there; a faster descent would move it.
+//!   [`super::descent`]) descends along a flat valley there; a faster descent would move it;
+//! - a tighter majorant than the frozen bound in each convex problem, so that a node that
+//!   starts slipping weakens within its iterate (2026-11-27): node i's bound a function of its
+//!   slip, clamp(b(r₀) + s (r − r₀), b(r_x), ·) from the iterate's r₀, with the chord slope
+//!   s = max(f b′(r₀), −c A_ii/ℓ_i) and r_x where b meets the chord again (a majorant of b on
+//!   [r₀, ∞) for the paper's convex fall, checked on samples; the fixed points are the law's
+//!   solutions as before), solved by the same Newton iterations with s in the slip rows. At 291k
+//!   (4 steps): f = 0.5, c = 0.2: 10.75 Newton iterations per step against 11.5, the step where
+//!   the zone grows from 235 to 460 nodes 12 → 10 iterates but 21 → 20 Newton iterations;
+//!   f = 0.5, c = 0.5: 8 iterates and 19 Newton iterations there, 11.25 per step; f = 1, c = 1:
+//!   the loop fails in steps 1 and 4. The iterates fall, the Newton iterations do not: inside
+//!   a convex problem the semismooth Newton's active set moves the front about one ring per
+//!   iteration as well.
 //!
 //! What the iterations follow is the slip front: a node that starts slipping keeps its frozen
 //! static bound for that iterate, and its neighbours see its weakened bound only in the next,
 //! so the front advances about one ring of nodes per iterate (291k, the step where the slip
 //! zone grows from 235 to 460 nodes: 7 iterates at a law residual near 2, then 5 converging
-//! 50–100× each). docs/performance.md has the analysis.
+//! 50–100× each), and with a weakening bound inside the iterate (the chord above) one ring per
+//! Newton iteration. docs/performance.md has the analysis.
 //!
 //! **Rejected.** Condensing matrix-free (C v by one Krylov solve per product) would cost a solve
 //! per product of the convexification loop's inner iterations (hundreds per step); the fast
