@@ -68,7 +68,7 @@ use super::error::ModelError as Error;
 use super::laws::ContactLaws;
 use super::problem::Problem;
 use super::state::State;
-use crate::fem::assembly::Matrices;
+use crate::fem::assembly::{Matrices, VectorMass};
 use crate::la::vector::{dot, norm2};
 use crate::la::CscMatrix;
 
@@ -331,22 +331,26 @@ struct MechanicalForms {
 /// replaces: ≈ 3.3 ms and more).
 fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64]) -> MechanicalForms {
     let (m, a, b) = (&mats.mass, &mats.viscosity, &mats.elasticity);
-    let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] =
-        if same_pattern(m, a) && same_pattern(m, b) {
-            let gathers = [
-                (&m.values[..], w),
-                (&m.values, dw),
-                (&a.values, w),
-                (&b.values, u),
-                (&b.values, du),
-            ];
-            column_forms(m, gathers, [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)])
-        } else {
-            let [mw, mdw, dmd] = column_forms(m, [(&m.values[..], w), (&m.values, dw)], [(0, w), (0, dw), (1, dw)]);
-            let [aw] = column_forms(a, [(&a.values[..], w)], [(0, w)]);
-            let [bu, bdu, dbd] = column_forms(b, [(&b.values[..], u), (&b.values, du)], [(0, u), (0, du), (1, du)]);
-            [mw, mdw, dmd, aw, bu, bdu, dbd]
-        };
+    let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = if same_pattern(a, b)
+    {
+        let gathers = [(&a.values[..], w), (&b.values, u), (&b.values, du)];
+        let mass = (m, [w, dw]);
+        column_forms(
+            a,
+            (Some(mass), gathers),
+            [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)],
+        )
+    } else {
+        let (mw, mdw) = (m.mul(w), m.mul(dw));
+        let [mw, mdw, dmd] = [dot(&mw, w), dot(&mdw, w), dot(&mdw, dw)];
+        let [aw] = column_forms(a, (None, [(&a.values[..], w)]), [(0, w)]);
+        let [bu, bdu, dbd] = column_forms(
+            b,
+            (None, [(&b.values[..], u), (&b.values, du)]),
+            [(0, u), (0, du), (1, du)],
+        );
+        [mw, mdw, dmd, aw, bu, bdu, dbd]
+    };
     MechanicalForms {
         w_mass_w,
         w_mass_dw,
@@ -366,26 +370,45 @@ fn same_pattern(a: &CscMatrix, b: &CscMatrix) -> bool {
 /// result does not depend on the number of threads.
 const BLOCK: usize = 4096;
 
-/// For matrices A_g on the pattern of `pattern` (`gathers[g]` = (values of A_g, y_g)) and
-/// `forms[f]` = (g, x_f): the forms x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers
-/// (A_gᵀ y_g)_c read once for all its forms. Blocks of columns in parallel.
+/// For matrices A_g on the pattern of `pattern` and `forms[f]` = (g, x_f): the forms
+/// x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers (A_gᵀ y_g)_c read once for all its forms.
+/// The gathers are ℳ's with `mass` = (ℳ, [y_0, y_1]) (g = 0, 1: ℳ's entries read through the
+/// vector pattern, [`VectorMass::entry_in_column`]), then `stored[g]` = (values of A_g, y_g) on
+/// the pattern. Blocks of columns in parallel.
 fn column_forms<const G: usize, const F: usize>(
     pattern: &CscMatrix,
-    gathers: [(&[f64], &[f64]); G],
+    (mass, stored): (Option<(&VectorMass, [&[f64]; 2])>, [(&[f64], &[f64]); G]),
     forms: [(usize, &[f64]); F],
 ) -> [f64; F] {
     let n = pattern.n_cols;
     let (col_ptr, row_idx) = (&pattern.col_ptr[..], &pattern.row_idx[..]);
+    let first_stored = if mass.is_some() { 2 } else { 0 };
     let block = |first: usize| {
         let mut sums = [0.0; F];
         for c in first..(first + BLOCK).min(n) {
-            // The G sums side by side: independent chains of multiply-adds (one sum after
-            // the other waits on each add, and was slower than the separate mat-vecs).
-            let mut column = [0.0; G];
-            for (k, &r) in (col_ptr[c]..col_ptr[c + 1]).zip(&row_idx[col_ptr[c]..col_ptr[c + 1]]) {
-                for (s, (values, y)) in column.iter_mut().zip(&gathers) {
-                    *s += values[k] * y[r as usize];
+            // The sums side by side: independent chains of multiply-adds (one sum after the
+            // other waits on each add, and was slower than the separate mat-vecs).
+            let mut column = [0.0; 8];
+            let (start, end) = (col_ptr[c], col_ptr[c + 1]);
+            let gather = |column: &mut [f64; 8], k: usize, r: usize| {
+                for (s, (values, y)) in column[first_stored..].iter_mut().zip(&stored) {
+                    *s += values[k] * y[r];
                 }
+            };
+            match mass {
+                Some((m, [y0, y1])) => {
+                    // Column (q, j): d rows per neighbour of q, ℳ's entry M_ρ's on row (p, j).
+                    let (d, j) = (m.dim, c % m.dim);
+                    let diagonal = &m.scalar.values[m.scalar.col_ptr[c / d]..];
+                    for (t, k) in (start..end).enumerate() {
+                        let r = row_idx[k] as usize;
+                        let value = if t % d == j { diagonal[t / d] } else { 0.0 };
+                        column[0] += value * y0[r];
+                        column[1] += value * y1[r];
+                        gather(&mut column, k, r);
+                    }
+                }
+                None => (start..end).for_each(|k| gather(&mut column, k, row_idx[k] as usize)),
             }
             for (sum, &(g, x)) in sums.iter_mut().zip(&forms) {
                 *sum += x[c] * column[g];
@@ -435,8 +458,8 @@ mod tests {
     fn one_pass_forms_are_the_mat_vecs() {
         let problem = super::super::samples::paper(96, 24, 4).unwrap();
         let mats = &problem.matrices;
-        let n = mats.mass.n_cols;
-        assert!(n > BLOCK && same_pattern(&mats.mass, &mats.elasticity));
+        let n = mats.mass.n_rows();
+        assert!(n > BLOCK && same_pattern(&mats.viscosity, &mats.elasticity));
         let rough = |seed: usize, len: usize| -> Vec<f64> {
             (0..len)
                 .map(|i| (((i + seed) * 7919) % 1000) as f64 / 500.0 - 1.0)

@@ -55,17 +55,23 @@ impl ContactPressure {
             theta_cols: Vec::new(),
             theta_values: Vec::new(),
         };
-        let symmetric = [&matrices.mass, &matrices.viscosity, &matrices.elasticity];
+        // ℳ, 𝒦_A, 𝒦_B on 𝒦_A's (vector) pattern, ℳ's entries read through it.
+        let pattern = &matrices.viscosity;
+        let values = |m: usize, dof: usize, k: usize| match m {
+            0 => matrices.mass.entry_in_column(dof, k - pattern.col_ptr[dof]),
+            1 => matrices.viscosity.values[k],
+            _ => matrices.elasticity.values[k],
+        };
         for node in contact {
             let p = node.node;
             let mut velocity: BTreeMap<usize, [f64; 3]> = BTreeMap::new();
             let mut theta: BTreeMap<usize, f64> = BTreeMap::new();
             for c in 0..d {
                 let dof = p * d + c;
-                for (m, matrix) in symmetric.iter().enumerate() {
-                    let range = matrix.col_ptr[dof]..matrix.col_ptr[dof + 1];
-                    for k in range {
-                        velocity.entry(matrix.row_idx[k] as usize).or_default()[m] += node.normal[c] * matrix.values[k];
+                for m in 0..3 {
+                    for k in pattern.col_ptr[dof]..pattern.col_ptr[dof + 1] {
+                        velocity.entry(pattern.row_idx[k] as usize).or_default()[m] +=
+                            node.normal[c] * values(m, dof, k);
                     }
                 }
             }

@@ -447,13 +447,18 @@ impl<'p> ColumnSource<'p> {
         let (vel, temp) = (&self.problem.velocity, &self.problem.temperature);
         let mats = &self.problem.matrices;
         let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
+        // ℳ, 𝒦_A and 𝒦_B on 𝒦_A's (vector) pattern, ℳ's entries read through it.
+        let vector = &mats.viscosity;
         let (k, n_w, position) = (self.k, vel.n_free, &self.position);
         if c < n_w {
             // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
             for &(f, b) in &self.full_entries[self.full_ptr[c]..self.full_ptr[c + 1]] {
-                for idx in mass.col_ptr[f]..mass.col_ptr[f + 1] {
-                    let value = mass.values[idx] / k + mats.viscosity.values[idx] + k * mats.elasticity.values[idx];
-                    for &(r, a) in vel.row(mass.row_idx[idx] as usize) {
+                let start = vector.col_ptr[f];
+                for idx in start..vector.col_ptr[f + 1] {
+                    let value = mass.entry_in_column(f, idx - start) / k
+                        + mats.viscosity.values[idx]
+                        + k * mats.elasticity.values[idx];
+                    for &(r, a) in vel.row(vector.row_idx[idx] as usize) {
                         add(position[r], a * b * value);
                     }
                 }
