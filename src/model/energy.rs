@@ -337,16 +337,18 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
         let mass = (m, [w, dw]);
         column_forms(
             a,
-            (Some(mass), gathers),
+            Some(mass),
+            gathers,
             [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)],
         )
     } else {
         let (mw, mdw) = (m.mul(w), m.mul(dw));
         let [mw, mdw, dmd] = [dot(&mw, w), dot(&mdw, w), dot(&mdw, dw)];
-        let [aw] = column_forms(a, (None, [(&a.values[..], w)]), [(0, w)]);
+        let [aw] = column_forms(a, None, [(&a.values[..], w)], [(0, w)]);
         let [bu, bdu, dbd] = column_forms(
             b,
-            (None, [(&b.values[..], u), (&b.values, du)]),
+            None,
+            [(&b.values[..], u), (&b.values, du)],
             [(0, u), (0, du), (1, du)],
         );
         [mw, mdw, dmd, aw, bu, bdu, dbd]
@@ -370,6 +372,9 @@ fn same_pattern(a: &CscMatrix, b: &CscMatrix) -> bool {
 /// result does not depend on the number of threads.
 const BLOCK: usize = 4096;
 
+/// ℳ and the two vectors y_0, y_1 of its gathers (ℳᵀy_0)_c, (ℳᵀy_1)_c in [`column_forms`].
+type MassGathers<'a> = (&'a VectorMass, [&'a [f64]; 2]);
+
 /// For matrices A_g on the pattern of `pattern` and `forms[f]` = (g, x_f): the forms
 /// x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers (A_gᵀ y_g)_c read once for all its forms.
 /// The gathers are ℳ's with `mass` = (ℳ, [y_0, y_1]) (g = 0, 1: ℳ's entries read through the
@@ -377,7 +382,8 @@ const BLOCK: usize = 4096;
 /// the pattern. Blocks of columns in parallel.
 fn column_forms<const G: usize, const F: usize>(
     pattern: &CscMatrix,
-    (mass, stored): (Option<(&VectorMass, [&[f64]; 2])>, [(&[f64], &[f64]); G]),
+    mass: Option<MassGathers>,
+    stored: [(&[f64], &[f64]); G],
     forms: [(usize, &[f64]); F],
 ) -> [f64; F] {
     let n = pattern.n_cols;
