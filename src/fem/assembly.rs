@@ -332,7 +332,7 @@ impl NormGrams {
 }
 
 /// ‖ε(v)‖_L²(Ω) of the P1 vector field with nodal values `v` (node-major, d per node): the sum
-/// over the cells of [`kernels::strain_squared`], exact for P1.
+/// over the cells of ∫_T ε(v) : ε(v) (`kernels::strain_squared`), exact for P1.
 pub fn strain_norm(mesh: &Mesh, v: &[f64]) -> f64 {
     let d = mesh.dim;
     sum_over_cells(mesh, |t, nodes| {
@@ -347,7 +347,7 @@ pub fn strain_norm(mesh: &Mesh, v: &[f64]) -> f64 {
 }
 
 /// ‖∇θ‖_L²(Ω) of the P1 scalar field with nodal values `theta`: the sum over the cells of
-/// [`kernels::gradient_squared`], exact for P1.
+/// ∫_T |∇θ|² (`kernels::gradient_squared`), exact for P1.
 pub fn gradient_norm(mesh: &Mesh, theta: &[f64]) -> f64 {
     sum_over_cells(mesh, |t, nodes| {
         let mut local = [0.0; 4];
