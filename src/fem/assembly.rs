@@ -500,6 +500,14 @@ mod tests {
         m
     }
 
+    /// The meshes of the sweep tests: a rectangle and a box.
+    fn test_meshes() -> [Mesh; 2] {
+        [
+            crate::mesh::rectangle(3.0, 1.0, 7, 3),
+            crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
+        ]
+    }
+
     /// The material of the sweep tests, with the given heat capacity.
     fn test_material(heat_capacity: f64) -> Material {
         Material {
@@ -518,10 +526,7 @@ mod tests {
     #[test]
     fn node_columns_are_the_sums_of_a_sweep_over_the_cells() {
         let material = test_material(1.3);
-        for mesh in [
-            crate::mesh::rectangle(3.0, 1.0, 7, 3),
-            crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
-        ] {
+        for mesh in test_meshes() {
             let swept = assemble_matrices(&mesh, &material, &[0], 2.5);
             let reference = scattered_by_cells(&mesh, &material);
             let bits = |m: &CscMatrix| m.values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
@@ -565,10 +570,7 @@ mod tests {
     #[test]
     fn matrices_do_not_depend_on_the_thread_count() {
         let material = test_material(1.0);
-        for mesh in [
-            crate::mesh::rectangle(3.0, 1.0, 7, 3),
-            crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
-        ] {
+        for mesh in test_meshes() {
             let one = assembled_on(1, &mesh, &material);
             for threads in [2, 3] {
                 let many = assembled_on(threads, &mesh, &material);
@@ -599,10 +601,7 @@ mod tests {
     #[test]
     fn cell_sums_of_the_norms_are_the_gram_matrices_quadratic_forms() {
         let material = test_material(1.0);
-        for mesh in [
-            crate::mesh::rectangle(3.0, 1.0, 7, 3),
-            crate::mesh::cuboid([1.0, 0.5, 0.5], [4, 2, 3]),
-        ] {
+        for mesh in test_meshes() {
             let reference = scattered_by_cells(&mesh, &material);
             let d = mesh.dim;
             let v: Vec<f64> = (0..mesh.n_nodes() * d)
