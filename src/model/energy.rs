@@ -378,7 +378,7 @@ type MassGathers<'a> = (&'a VectorMass, [&'a [f64]; 2]);
 /// For matrices A_g on the pattern of `pattern` and `forms[f]` = (g, x_f): the forms
 /// x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers (A_gᵀ y_g)_c read once for all its forms.
 /// The gathers are ℳ's with `mass` = (ℳ, [y_0, y_1]) (g = 0, 1: ℳ's entries read through the
-/// vector pattern, [`VectorMass::entry_in_column`]), then `stored[g]` = (values of A_g, y_g) on
+/// vector pattern, [`VectorMass::column`]), then `stored[g]` = (values of A_g, y_g) on
 /// the pattern. Blocks of columns in parallel.
 fn column_forms<const G: usize, const F: usize>(
     pattern: &CscMatrix,
@@ -403,12 +403,10 @@ fn column_forms<const G: usize, const F: usize>(
             };
             match mass {
                 Some((m, [y0, y1])) => {
-                    // Column (q, j): d rows per neighbour of q, ℳ's entry M_ρ's on row (p, j).
-                    let (d, j) = (m.dim, c % m.dim);
-                    let diagonal = &m.scalar.values[m.scalar.col_ptr[c / d]..];
+                    let mass_column = m.column(c);
                     for (t, k) in (start..end).enumerate() {
                         let r = row_idx[k] as usize;
-                        let value = if t % d == j { diagonal[t / d] } else { 0.0 };
+                        let value = mass_column.entry(t);
                         column[0] += value * y0[r];
                         column[1] += value * y1[r];
                         gather(&mut column, k, r);

@@ -58,7 +58,7 @@ impl ContactPressure {
         // ℳ, 𝒦_A, 𝒦_B on 𝒦_A's (vector) pattern, ℳ's entries read through it.
         let pattern = &matrices.viscosity;
         let values = |m: usize, dof: usize, k: usize| match m {
-            0 => matrices.mass.entry_in_column(dof, k - pattern.col_ptr[dof]),
+            0 => matrices.mass.column(dof).entry(k - pattern.col_ptr[dof]),
             1 => matrices.viscosity.values[k],
             _ => matrices.elasticity.values[k],
         };

@@ -453,9 +453,9 @@ impl<'p> ColumnSource<'p> {
         if c < n_w {
             // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
             for &(f, b) in &self.full_entries[self.full_ptr[c]..self.full_ptr[c + 1]] {
-                let start = vector.col_ptr[f];
+                let (start, mass_column) = (vector.col_ptr[f], mass.column(f));
                 for idx in start..vector.col_ptr[f + 1] {
-                    let value = mass.entry_in_column(f, idx - start) / k
+                    let value = mass_column.entry(idx - start) / k
                         + mats.viscosity.values[idx]
                         + k * mats.elasticity.values[idx];
                     for &(r, a) in vel.row(vector.row_idx[idx] as usize) {
