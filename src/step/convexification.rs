@@ -14,8 +14,10 @@
 //!
 //! **The inner tolerance.** The paper's Uzawa loop solves each convex problem to a fixed
 //! tolerance ([`InnerTolerance::Fixed`]). The Newton-type inner solvers need each convex problem
-//! solved only as far as the loop is converged: to 1 % of the loop's last change, never looser
-//! than 10⁻⁴ nor tighter than a floor ([`InnerTolerance::Adaptive`]).
+//! solved only as far as the loop is converged: to 1 % of the loop's smallest change so far,
+//! never looser than a ceiling nor tighter than a floor ([`InnerTolerance::Adaptive`]). The
+//! direct path's ceiling is 10⁻⁴; the iterative path's is 10⁻², where every inner Newton
+//! iteration is a Krylov solve ([`super::newton_krylov`] has the measurements).
 //!
 //! Depends on: the step's figures and failures ([`super::StepInfo`], [`super::StepFailure`]).
 
@@ -50,22 +52,23 @@ pub(super) trait ConvexSubproblem {
 pub(super) enum InnerTolerance {
     /// The same tolerance for every convex problem.
     Fixed(f64),
-    /// 1 % of the loop's last change, between `floor` and 10⁻⁴ (or `floor`, if larger).
-    Adaptive { floor: f64 },
+    /// 1 % of the loop's smallest change so far, between `floor` and `ceiling` (or `floor`,
+    /// if larger).
+    Adaptive { floor: f64, ceiling: f64 },
 }
 
 impl InnerTolerance {
     fn first(self) -> f64 {
         match self {
             InnerTolerance::Fixed(tolerance) => tolerance,
-            InnerTolerance::Adaptive { floor } => 1e-4f64.max(floor),
+            InnerTolerance::Adaptive { floor, ceiling } => ceiling.max(floor),
         }
     }
 
     fn next(self, current: f64, checks: &[(Criterion, f64, f64)]) -> f64 {
         match self {
             InnerTolerance::Fixed(tolerance) => tolerance,
-            InnerTolerance::Adaptive { floor } => {
+            InnerTolerance::Adaptive { floor, .. } => {
                 let change = checks.iter().fold(0.0f64, |m, c| m.max(c.1));
                 (0.01 * change).clamp(floor, current)
             }

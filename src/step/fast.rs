@@ -270,6 +270,7 @@ impl<'a> FastSolver<'a> {
             max_iterations: self.paper_params.max_convexification,
             inner: InnerTolerance::Adaptive {
                 floor: self.params.tolerance,
+                ceiling: 1e-4,
             },
         };
         let iterate = convexify(&mut subproblem, OnContact { w, xi }, &params, info)?;
