@@ -143,6 +143,14 @@ enum Command {
         /// needs a build with `--features petsc`).
         #[arg(long, value_delimiter = ',', default_value = "ilu")]
         preconditioners: Vec<String>,
+        /// The friction bound S of the 3D suite's runs (`friction.bound`; default: the
+        /// scenario's 150). The 3D example's slip zone is the contact face's boundary ring of
+        /// nodes at every size (its edges' stress concentration): a finer mesh resolves it no
+        /// better. With S = 8 a zone of about 40 % of the face grows inward, the same on every
+        /// mesh from nx = 80 on: the case on which the outer iterations' growth with refinement
+        /// is a property of the method rather than of the zone (docs/performance.md).
+        #[arg(long)]
+        friction_bound_3d: Option<f64>,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -524,6 +532,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             direct_up_to,
             coarse_k_cells,
             preconditioners,
+            friction_bound_3d,
         } => {
             if three_d {
                 let suite = Suite3d {
@@ -533,6 +542,10 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     direct_up_to,
                     coarse_k_cells,
                     preconditioners,
+                    overrides: friction_bound_3d
+                        .map(|s| format!("friction.bound={s}"))
+                        .into_iter()
+                        .collect(),
                 };
                 bench_3d(&out, &suite)
             } else if hard {
@@ -797,6 +810,8 @@ struct Suite3d {
     direct_up_to: usize,
     coarse_k_cells: usize,
     preconditioners: Vec<String>,
+    /// Scenario keys set on every run (`key=value`).
+    overrides: Vec<String>,
 }
 
 /// `bench --3d`: the 3D example at growing sizes on both linear paths, then one size at
@@ -833,7 +848,17 @@ fn bench_3d(out: &std::path::Path, suite: &Suite3d) -> anyhow::Result<()> {
     let mut rows = Vec::new();
     for (linear, preconditioner, nx, k) in runs {
         eprintln!("{linear} ({preconditioner}), nx = {nx}, k = 1/{} …", (1.0 / k).round());
-        let row = measure_3d(&exe, out, scenario, linear, preconditioner, nx, suite.steps, k)?;
+        let row = measure_3d(
+            &exe,
+            out,
+            scenario,
+            &suite.overrides,
+            linear,
+            preconditioner,
+            nx,
+            suite.steps,
+            k,
+        )?;
         eprintln!(
             "  {} in {:.1} s: {:.3} s per step, {:.0} MiB",
             row.status,

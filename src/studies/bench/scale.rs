@@ -36,7 +36,13 @@ pub struct ScaleRow {
     /// Time stepping per step (without output), s.
     pub per_step: f64,
     pub newton_per_step: f64,
+    /// Convexification (outer) iterations per step, each one or more Newton iterations.
+    #[serde(default)]
+    pub outer_per_step: f64,
     pub krylov_per_step: f64,
+    /// Slip nodes at the last step (the size of the slip zone the steps' iterations resolve).
+    #[serde(default)]
+    pub slip_nodes: Option<usize>,
     /// Stored entries of the factor (LDLᵀ or ILU(0)).
     pub factor_nnz: usize,
     pub peak_memory_mib: Option<f64>,
@@ -60,12 +66,14 @@ impl ScaleRow {
 
 /// Runs the 3D example (`scenario`, a path) with nx × nx/4 × nx/4 cells for `steps` steps of
 /// size `k` on the `linear` path (the iterative one with `preconditioner`, `ilu` or `amg`) in a
-/// child process (outputs off) and reads its summary.
+/// child process (outputs off), with the scenario's keys `overrides` (`key=value`) on top, and
+/// reads its summary.
 #[allow(clippy::too_many_arguments)]
 pub fn measure_3d(
     exe: &Path,
     work: &Path,
     scenario: &Path,
+    overrides: &[String],
     linear: &str,
     preconditioner: &str,
     nx: usize,
@@ -97,7 +105,7 @@ pub fn measure_3d(
         .args(["run", "--quiet", "--overwrite", "--out"])
         .arg(&dir)
         .arg(scenario);
-    for set in &sets {
+    for set in sets.iter().chain(overrides) {
         command.args(["--set", set]);
     }
     let clock = std::time::Instant::now();
@@ -132,6 +140,11 @@ pub fn measure_3d(
         setup: num(&t["factorization"]) + num(&t["solver_setup"]),
         per_step: num(&t["time_stepping"]) / done,
         newton_per_step: int(&summary["newton_iterations"]) as f64 / done,
+        outer_per_step: int(&summary["convexification_iterations"]) as f64 / done,
+        slip_nodes: (summary["outputs"].as_array())
+            .and_then(|outputs| outputs.last())
+            .and_then(|last| last["slip_nodes"].as_u64())
+            .map(|n| n as usize),
         krylov_per_step: int(&summary["krylov_iterations"]) as f64 / done,
         factor_nnz: int(&summary["factor_nnz"]),
         peak_memory_mib: summary["peak_memory_mib"].as_f64(),
@@ -142,7 +155,7 @@ pub fn measure_3d(
 /// The table of `bench --3d`, with the growth exponents of each path in the unknowns.
 pub fn format_scale_table(rows: &[ScaleRow]) -> String {
     let mut out = format!(
-        "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>9} {:>11} {:>8} {:>9}\n",
+        "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>9} {:>6} {:>11} {:>8} {:>9}\n",
         "path",
         "cells",
         "unknowns",
@@ -152,14 +165,16 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
         "setup s",
         "s / step",
         "Newton",
+        "outer",
         "Krylov",
+        "slip",
         "factor nnz",
         "peak MiB",
         "wall s"
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>9.1} {:>11} {:>8} {:>9.1}\n",
+            "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>7.1} {:>9.1} {:>6} {:>11} {:>8} {:>9.1}\n",
             r.path(),
             format!("{}×{}×{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
@@ -169,7 +184,9 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
             r.setup,
             r.per_step,
             r.newton_per_step,
+            r.outer_per_step,
             r.krylov_per_step,
+            r.slip_nodes.map_or("-".to_string(), |n| n.to_string()),
             r.factor_nnz,
             r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
             r.wall,
@@ -192,9 +209,19 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
             fit(&|r| r.setup),
             fit(&|r| r.peak_memory_mib.unwrap_or(0.0)),
         ) {
+            let (smallest, largest) = (
+                same.iter().min_by_key(|r| r.unknowns),
+                same.iter().max_by_key(|r| r.unknowns),
+            );
+            let ratio = |f: fn(&ScaleRow) -> f64| match (smallest, largest) {
+                (Some(a), Some(b)) => f(b) / f(a),
+                _ => f64::NAN,
+            };
             out.push_str(&format!(
-                "{linear}: growth exponents in the unknowns (least squares, k = 1/{}): time per step {step:.2}, set-up {setup:.2}, peak memory {memory:.2}\n",
-                (1.0 / k).round()
+                "{linear}: growth exponents in the unknowns (least squares, k = 1/{}): time per step {step:.2}, set-up {setup:.2}, peak memory {memory:.2}; Newton iterations per step ×{:.2} and outer ×{:.2} from the first size to the largest\n",
+                (1.0 / k).round(),
+                ratio(|r| r.newton_per_step),
+                ratio(|r| r.outer_per_step),
             ));
         }
     }
@@ -209,4 +236,56 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(nx: usize, unknowns: usize, newton: f64, outer: f64, per_step: f64) -> ScaleRow {
+        ScaleRow {
+            linear: "iterative".into(),
+            preconditioner: Some("ilu".into()),
+            cells: [nx, nx / 4, nx / 4],
+            unknowns,
+            contact_nodes: (nx + 1) * (nx / 4 + 1),
+            k: 1.0 / 64.0,
+            steps: 4,
+            status: "completed".into(),
+            failure: None,
+            assembly: 0.1,
+            setup: unknowns as f64 * 1e-6,
+            per_step,
+            newton_per_step: newton,
+            outer_per_step: outer,
+            krylov_per_step: 3.0 * newton,
+            slip_nodes: Some(nx * 2),
+            factor_nnz: 60 * unknowns,
+            peak_memory_mib: Some(unknowns as f64 * 1e-3),
+            wall: 1.0,
+        }
+    }
+
+    /// The table's growth line: the time exponent fitted in the unknowns, and the iteration
+    /// ratios from the smallest size to the largest whatever the rows' order.
+    #[test]
+    fn the_growth_line_has_the_exponent_and_the_iteration_ratios() {
+        // Time per step ∝ N^1.5, Newton 6 → 18, outer 5 → 10; the largest size listed first.
+        let rows = [
+            row(160, 1_000_000, 18.0, 10.0, 1000f64.powf(1.5) * 1e-4),
+            row(40, 10_000, 6.0, 5.0, 10f64.powf(1.5) * 1e-4),
+            row(80, 100_000, 12.0, 8.0, 100f64.powf(1.5) * 1e-4),
+        ];
+        let table = format_scale_table(&rows);
+        assert!(table.contains("time per step 1.50"), "{table}");
+        assert!(
+            table.contains("Newton iterations per step ×3.00 and outer ×2.00"),
+            "{table}"
+        );
+        // The slip column shows each row's count.
+        assert!(
+            table.lines().nth(1).is_some_and(|line| line.contains(" 320 ")),
+            "{table}"
+        );
+    }
 }
