@@ -1040,6 +1040,13 @@ fn print_summary(s: &Summary) {
             format!("{} ({})", s.nonmonotone_newton_steps, s.nonmonotone_newton_iterations)
         );
     }
+    if s.anderson_combinations > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "iterates from Anderson (of all)",
+            format!("{} ({})", s.anderson_combinations, s.convexification_iterations)
+        );
+    }
     if s.exchange_iterations > 0 {
         println!(
             "{:<34} {:>12}",

@@ -255,6 +255,9 @@ pub struct PyStepInfo {
     /// Iterations of the iterative path's Newton on the nonmonotone law, where the
     /// convexification loop failed (0 where the loop solved the step).
     nonmonotone_newton_iterations: usize,
+    /// Convexification iterates of the iterative path that started from an Anderson
+    /// combination of the bounds (`solver.anderson_depth`).
+    anderson_combinations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -276,6 +279,7 @@ impl From<StepInfo> for PyStepInfo {
             fallback: info.fallback,
             descent_sweeps: info.descent_sweeps,
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
+            anderson_combinations: info.anderson_combinations,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             krylov_iterations: info.krylov_iterations,
@@ -302,6 +306,7 @@ impl PyStepInfo {
         d.set_item("fallback", self.fallback)?;
         d.set_item("descent_sweeps", self.descent_sweeps)?;
         d.set_item("nonmonotone_newton_iterations", self.nonmonotone_newton_iterations)?;
+        d.set_item("anderson_combinations", self.anderson_combinations)?;
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
         d.set_item("krylov_iterations", self.krylov_iterations)?;
@@ -312,14 +317,15 @@ impl PyStepInfo {
     fn __repr__(&self) -> String {
         format!(
             "StepInfo(convexification_iterations={}, inner_iterations={}, newton_iterations={}, fallback={}, \
-             descent_sweeps={}, nonmonotone_newton_iterations={}, substeps={}, cutback_depth={}, \
-             krylov_iterations={})",
+             descent_sweeps={}, nonmonotone_newton_iterations={}, anderson_combinations={}, substeps={}, \
+             cutback_depth={}, krylov_iterations={})",
             self.convexification_iterations,
             self.inner_iterations,
             self.newton_iterations,
             if self.fallback { "True" } else { "False" },
             self.descent_sweeps,
             self.nonmonotone_newton_iterations,
+            self.anderson_combinations,
             self.substeps,
             self.cutback_depth,
             self.krylov_iterations
@@ -562,11 +568,7 @@ impl PyContact {
     /// 1.0 / 0.0.
     fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let rows = contact_csv_rows(self.dim, &self.rows);
-        matrix(
-            py,
-            rows.concat(),
-            self.header().len(),
-        )
+        matrix(py, rows.concat(), self.header().len())
     }
 
     fn __len__(&self) -> usize {

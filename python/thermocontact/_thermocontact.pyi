@@ -104,6 +104,7 @@ class StepInfo:
     fallback: bool
     descent_sweeps: int
     nonmonotone_newton_iterations: int
+    anderson_combinations: int
     substeps: int
     cutback_depth: int
     krylov_iterations: int

@@ -133,6 +133,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             energy: self.cumulative_energy(&info.energy),
             energy_residual: info.energy.relative_residual(),
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
+            anderson_combinations: info.anderson_combinations,
             heat_residual: info.energy.relative_heat_residual(),
         };
         self.tally.add_step(info, step);
@@ -279,6 +280,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             descent_sweeps: tally.descent_sweeps,
             nonmonotone_newton_steps: tally.nonmonotone_newton_steps,
             nonmonotone_newton_iterations: tally.nonmonotone_newton_iterations,
+            anderson_combinations: tally.anderson_combinations,
             krylov_iterations: tally.krylov_iterations,
             linear: report.linear.name().to_string(),
             preconditioner: report.preconditioner.map(|p| p.name().to_string()),

@@ -116,6 +116,10 @@ pub struct Summary {
     pub nonmonotone_newton_steps: usize,
     #[serde(default)]
     pub nonmonotone_newton_iterations: usize,
+    /// Convexification iterates of the iterative path that started from an Anderson
+    /// combination of the bounds (`solver.anderson_depth`), over all steps.
+    #[serde(default)]
+    pub anderson_combinations: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
     /// Over the whole run: a continued run adds its own to those of the parts before (their
@@ -417,6 +421,10 @@ pub struct StepRecord {
     /// ([`StepInfo::nonmonotone_newton_iterations`]).
     #[serde(default)]
     pub nonmonotone_newton_iterations: usize,
+    /// Convexification iterates that started from an Anderson combination of the bounds
+    /// ([`StepInfo::anderson_combinations`]).
+    #[serde(default)]
+    pub anderson_combinations: usize,
 }
 
 /// Increments not measured (and those of checkpoints written before steps.csv had them).
@@ -436,8 +444,9 @@ impl StepRecord {
     /// from t = 0 (so that K + E + viscous + numerical + frictional + thermal stress work − load
     /// work − foundation work − energy_residual_J = K₀ + E₀ on every row), and this step's
     /// residuals relative to their balance's largest term (docs/energy.md); last, the iterations
-    /// of the iterative path's way out where the convexification loop failed.
-    pub const HEADER: [&'static str; 36] = [
+    /// of the iterative path's way out where the convexification loop failed and the iterates
+    /// its loop started from an Anderson combination.
+    pub const HEADER: [&'static str; 37] = [
         "n",
         "t",
         "convexification",
@@ -474,6 +483,7 @@ impl StepRecord {
         "heat_residual_J",
         "heat_residual_rel",
         "nonmonotone_newton",
+        "anderson",
     ];
 
     /// The record as a `steps.csv` row.
@@ -517,6 +527,7 @@ impl StepRecord {
             e.heat_residual,
             self.heat_residual,
             self.nonmonotone_newton_iterations as f64,
+            self.anderson_combinations as f64,
         ]);
         row
     }
@@ -539,6 +550,8 @@ pub struct Tally {
     pub nonmonotone_newton_steps: usize,
     #[serde(default)]
     pub nonmonotone_newton_iterations: usize,
+    #[serde(default)]
+    pub anderson_combinations: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
@@ -586,6 +599,7 @@ impl Tally {
         self.descent_sweeps += info.descent_sweeps;
         self.nonmonotone_newton_steps += usize::from(info.nonmonotone_newton_iterations > 0);
         self.nonmonotone_newton_iterations += info.nonmonotone_newton_iterations;
+        self.anderson_combinations += info.anderson_combinations;
         self.krylov_iterations += info.krylov_iterations;
         self.exchange_iterations += info.exchange_iterations;
         self.pressure_iterations += info.pressure_iterations;

@@ -628,6 +628,7 @@ impl Scenario {
                 preconditioner: s.preconditioner,
                 ..KrylovParams::default()
             },
+            anderson_depth: s.anderson_depth,
         }
     }
 

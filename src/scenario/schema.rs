@@ -642,6 +642,7 @@ pub struct SolverSpec {
     pub krylov_tolerance: f64,
     pub max_krylov: usize,
     pub preconditioner: PreconditionerKind,
+    pub anderson_depth: usize,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

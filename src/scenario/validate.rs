@@ -11,6 +11,10 @@ use crate::step::{LinearKind, PreconditionerKind};
 /// different time grid, not a rescue.
 pub const MAX_CUTBACK_DEPTH: usize = 20;
 
+/// The deepest Anderson acceleration a scenario may ask for: the loop's tails are a handful of
+/// iterates (depth 2 and 3 took the same iterations on the 3D example, `step::anderson`).
+pub const MAX_ANDERSON_DEPTH: usize = 8;
+
 /// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
 /// right-hand side multiplied by others (ρ/k, k·E, lengths to the power d); beyond this the
 /// products overflow or swamp each other and the step matrix turns singular in floating point.
@@ -286,6 +290,13 @@ impl Scenario {
             ));
         }
         at_least_one("solver.max_krylov", s.max_krylov)?;
+        if s.anderson_depth > MAX_ANDERSON_DEPTH {
+            return Err(invalid(
+                "solver.anderson_depth",
+                &s.anderson_depth,
+                &format!("at most {MAX_ANDERSON_DEPTH} (0 turns the acceleration off)"),
+            ));
+        }
         if s.preconditioner == PreconditionerKind::Amg && !cfg!(feature = "petsc") {
             return Err(invalid(
                 "solver.preconditioner",

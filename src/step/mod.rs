@@ -18,6 +18,7 @@
 
 pub mod abort;
 mod amg;
+mod anderson;
 mod condensed;
 mod convexification;
 mod descent;
@@ -414,6 +415,9 @@ pub struct SolverParams {
     pub linear: LinearKind,
     /// Tolerance and caps of the iterative path's Krylov solves.
     pub krylov: KrylovParams,
+    /// Depth of the Anderson acceleration of the iterative path's convexification loop in its
+    /// linear tail (`anderson::TailAnderson`; 0: off).
+    pub anderson_depth: usize,
 }
 
 impl SolverParams {
@@ -439,6 +443,7 @@ impl Default for SolverParams {
             max_cutback_depth: 5,
             linear: LinearKind::Auto,
             krylov: KrylovParams::default(),
+            anderson_depth: 2,
         }
     }
 }
@@ -464,6 +469,9 @@ pub struct StepInfo {
     /// Iterations of the iterative path's Newton on the nonmonotone law, its way out where the
     /// convexification loop failed (0 where the loop solved the step).
     pub nonmonotone_newton_iterations: usize,
+    /// Convexification iterates of the iterative path that started from an Anderson
+    /// combination of the bounds (`solver.anderson_depth`).
+    pub anderson_combinations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -488,6 +496,7 @@ impl StepInfo {
         self.fallback |= other.fallback;
         self.descent_sweeps += other.descent_sweeps;
         self.nonmonotone_newton_iterations += other.nonmonotone_newton_iterations;
+        self.anderson_combinations += other.anderson_combinations;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;

@@ -89,6 +89,7 @@ impl<'a> StepSolver<'a> {
                         system,
                         params.tolerance,
                         params.max_convexification,
+                        params.anderson_depth,
                     )),
                 })
             }
