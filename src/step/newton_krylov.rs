@@ -19,8 +19,8 @@
 //! rows of the contact nodes changed, node by node, inside A's pattern. The linear equations
 //! then hold at the new iterate, so the convex problem is solved once its law holds there (to
 //! 1 % of the loop's smallest change so far, as the fast solver's inner solves, and at most
-//! [`INNER_CEILING`]): usually after one Newton iteration (1 388
-//! Newton iterations for 1 320 convexification iterates on the 3D example).
+//! [`INNER_CEILING`]): usually after one Newton iteration (1 258
+//! Newton iterations for 1 190 convexification iterates on the 3D example).
 //! The frictional heat is taken at the iterate's w (it is weak: α_exp = 3·10⁻⁴ in the paper).
 //! The loop stops when w and ξ on Γ_C change by less than ε_conv and the nonmonotone law holds
 //! at every node to ε_conv: the fast solver's criteria ([`super::fast`]). Where the step has

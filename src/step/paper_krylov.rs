@@ -4,7 +4,7 @@
 //!
 //! Nothing is condensed, so it runs where the direct factor does not fit; its iterates are the
 //! direct path's to the Krylov tolerance (`tests/newton_krylov.rs`). It pays a solve per Uzawa
-//! iterate (29 559 of them on the 3D example, against 1 388 Newton iterations for the fast
+//! iterate (29 559 of them on the 3D example, against 1 258 Newton iterations for the fast
 //! solver's counterpart, [`super::newton_krylov`]): it is there to run the paper's own algorithm
 //! at scale, as a reference for the fast one, not for speed. Each solve starts from the previous
 //! one's solution, and the matrix is A itself (never linearized), so its ILU(0) is the one
