@@ -129,6 +129,9 @@
 //!   but on the coarse 3D case of `tests/newton_krylov.rs` the loop then reaches another of
 //!   the step's solutions (displacements 1.15·10⁻³ apart), as it does near a repelling fixed
 //!   point (below).
+//!   Looser in the first convex problem of a step only (10⁻² or 10⁻¹, then 10⁻³): 12.25 →
+//!   12.0 and 11.75 Newton iterations per step on the S = 8 case at 134k, 9.5 → 9.5 and 9.0
+//!   at 291k, and the same other solution on that coarse case at 10⁻²: not kept;
 //! - Anderson acceleration once more, only in the loop's linear tail ([`super::anderson`]'s
 //!   rule; kept, 2026-11-27): where the tail is long, 14.75 → 12.25 Newton iterations per step
 //!   (11.75 → 9.25 iterates) on the 3D example with S = 8 at 134k unknowns, 88.5 → 80.75 on the
