@@ -17,6 +17,11 @@ fn load(file: Option<&str>, overrides: &[&str], linear: &str) -> Scenario {
     Scenario::load(file, &all).unwrap()
 }
 
+/// Each contact node's stick/slip state in an output's rows.
+fn status(rows: &[thermocontact::model::ContactRow]) -> Vec<bool> {
+    rows.iter().map(|r| r.slip).collect()
+}
+
 fn run(file: Option<&str>, overrides: &[&str], linear: &str) -> (Summary, State) {
     load(file, overrides, linear).run_quiet().unwrap()
 }
@@ -46,7 +51,6 @@ fn compare(file: Option<&str>, overrides: &[&str]) -> Summary {
         iterative_summary.max_law_residual
     );
     for (d, i) in direct_summary.outputs.iter().zip(&iterative_summary.outputs) {
-        let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
         assert_eq!(status(&d.contact), status(&i.contact), "node statuses at t = {}", d.t);
         assert!(d.slip_nodes > 0, "the comparison should see slip (t = {})", d.t);
     }
@@ -329,7 +333,6 @@ fn newton_on_the_law_finishes_the_steps_the_loop_cannot() {
         );
         assert_fields_agree(&by_loop, &by_newton, 1e-7, cap);
         for (a, b) in loop_summary.outputs.iter().zip(&summary.outputs) {
-            let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
             assert_eq!(status(&a.contact), status(&b.contact), "node statuses at t = {}", a.t);
         }
     }
@@ -379,7 +382,6 @@ fn outer_iterations_stay_bounded_where_the_slip_zone_converges() {
         );
         assert_fields_agree(&plain, &accelerated, 1e-5, &case);
         for (a, b) in plain_summary.outputs.iter().zip(&summary.outputs) {
-            let status = |rows: &[thermocontact::model::ContactRow]| rows.iter().map(|r| r.slip).collect::<Vec<_>>();
             assert_eq!(
                 status(&a.contact),
                 status(&b.contact),

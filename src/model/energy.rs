@@ -389,6 +389,8 @@ fn column_forms<const G: usize, const F: usize>(
     let n = pattern.n_cols;
     let (col_ptr, row_idx) = (&pattern.col_ptr[..], &pattern.row_idx[..]);
     let first_stored = if mass.is_some() { 2 } else { 0 };
+    // The sums of a column sit side by side in 8 slots: ℳ's two and the stored matrices'.
+    const { assert!(G + 2 <= 8, "at most six gathers beside ℳ's") };
     let block = |first: usize| {
         let mut sums = [0.0; F];
         for c in first..(first + BLOCK).min(n) {

@@ -38,7 +38,9 @@
 //! from the first iterate it cycled (the header of [`super::newton_krylov`]). Depth 2 is the
 //! default (`solver.anderson_depth`; 0 turns it off).
 //!
-//! Depends on: nothing of this crate (vectors of bounds and a split).
+//! Depends on: [`crate::la::vector`] (dot products).
+
+use crate::la::vector::dot;
 
 /// Anderson acceleration of the bounds, for one step's convexification loop.
 #[derive(Debug, Clone)]
@@ -150,21 +152,14 @@ impl TailAnderson {
 /// least-squares coefficients of f_m on ΔF, by modified Gram–Schmidt on ΔF's columns (a column
 /// that adds nothing new is dropped).
 fn combination(history: &[(Vec<f64>, Vec<f64>)]) -> Vec<f64> {
-    let residual = |j: usize| -> Vec<f64> { history[j].1.iter().zip(&history[j].0).map(|(t, g)| t - g).collect() };
     let m = history.len() - 1;
-    let last = residual(m);
-    // Columns of ΔF and ΔT, oldest first.
-    let mut df: Vec<Vec<f64>> = Vec::with_capacity(m);
-    let mut dt: Vec<Vec<f64>> = Vec::with_capacity(m);
-    let mut previous = residual(0);
-    for j in 1..=m {
-        let f = if j == m { last.clone() } else { residual(j) };
-        df.push(f.iter().zip(&previous).map(|(a, b)| a - b).collect());
-        dt.push(history[j].1.iter().zip(&history[j - 1].1).map(|(a, b)| a - b).collect());
-        previous = f;
-    }
+    let difference = |a: &[f64], b: &[f64]| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x - y).collect() };
+    // f_j = T(g_j) − g_j, then the columns of ΔF and ΔT, oldest first.
+    let residuals: Vec<Vec<f64>> = history.iter().map(|(g, t)| difference(t, g)).collect();
+    let df: Vec<Vec<f64>> = (1..=m).map(|j| difference(&residuals[j], &residuals[j - 1])).collect();
+    let dt: Vec<Vec<f64>> = (1..=m).map(|j| difference(&history[j].1, &history[j - 1].1)).collect();
+    let last = &residuals[m];
     // QR of ΔF by modified Gram–Schmidt; R upper triangular, Q's columns in `q`.
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let mut q: Vec<Vec<f64>> = Vec::with_capacity(m);
     let mut r = vec![vec![0.0; m]; m];
     let mut kept: Vec<usize> = Vec::with_capacity(m);
@@ -186,7 +181,7 @@ fn combination(history: &[(Vec<f64>, Vec<f64>)]) -> Vec<f64> {
         kept.push(j);
     }
     // γ on the kept columns: R γ = Qᵀ f_m, back substitution.
-    let rhs: Vec<f64> = q.iter().map(|qi| dot(qi, &last)).collect();
+    let rhs: Vec<f64> = q.iter().map(|qi| dot(qi, last)).collect();
     let mut gamma = vec![0.0; kept.len()];
     for i in (0..kept.len()).rev() {
         let tail: f64 = (i + 1..kept.len()).map(|l| r[i][kept[l]] * gamma[l]).sum();
