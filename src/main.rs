@@ -611,6 +611,18 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             }
             // A continued run starts from its checkpoint: `initial.from` is not read again (that
             // checkpoint may be gone; its name still counts in the scenario's fingerprint).
+            // A rank of a distributed run builds its share of the matrices (the columns its
+            // rows read: `model::ColumnShare`).
+            #[cfg(feature = "mpi")]
+            let problem = if size > 1 {
+                let comm = thermocontact::la::mpi::Communicator::world()?;
+                scenario.build_on_ranks(restart.is_some(), comm)?
+            } else if restart.is_some() {
+                scenario.build_continued()?
+            } else {
+                scenario.build()?
+            };
+            #[cfg(not(feature = "mpi"))]
             let problem = match &restart {
                 Some(_) => scenario.build_continued()?,
                 None => scenario.build()?,
@@ -623,8 +635,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             }
             if size > 1 && root {
                 println!(
-                    "distributed over {size} ranks (PETSc + MPI): every rank holds the problem, each owns the rows of \
-                     its part of the mesh and writes its piece of each frame into {}/; rank 0 the other files",
+                    "distributed over {size} ranks (PETSc + MPI): each rank owns the rows of its part of the mesh, \
+                     holds the matrices' columns they read and writes its piece of each frame into {}/; rank 0 the other files",
                     out.display()
                 );
             }

@@ -155,7 +155,8 @@ mod distributed {
     }
 
     /// The runs in `one` and `other` agree: steps.csv's slip, stick, substeps and cutback depth
-    /// at every step, every contact CSV's slip flag at every node, its fields within
+    /// at every step, its energies within [`FIELD_BOUND`] of each one's largest magnitude, every
+    /// contact CSV's slip flag at every node, its fields within
     /// [`FIELD_BOUND`] of their largest magnitude; their frames ([`assert_frames_agree`]).
     fn assert_runs_agree(one: &Path, other: &Path) {
         assert_frames_agree(one, other);
@@ -167,6 +168,23 @@ mod distributed {
             for (ra, rb) in a.iter().zip(&b) {
                 assert_eq!(ra[c], rb[c], "steps.csv {name} at step {}", ra[0]);
             }
+        }
+        // The energies, each rank's part of those read from its share of the matrices summed
+        // over the ranks (`model::ColumnShare`): within the fields' bound of each column's
+        // largest magnitude (the balances' residuals are rounding: left out).
+        let energies = header
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h.ends_with("_J") && !h.contains("residual"));
+        for (c, name) in energies {
+            let values = |rows: &[Vec<String>]| -> Vec<f64> { rows.iter().map(|r| r[c].parse().unwrap()).collect() };
+            let (va, vb) = (values(&a), values(&b));
+            let scale = va.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
+            let worst = va.iter().zip(&vb).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            assert!(
+                worst <= FIELD_BOUND * scale,
+                "steps.csv {name}: {worst:e} apart, bound {FIELD_BOUND:e} × {scale:e}"
+            );
         }
         let mut contact: Vec<PathBuf> = std::fs::read_dir(one)
             .unwrap()

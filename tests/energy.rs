@@ -15,10 +15,10 @@ use thermocontact::time::{self, TimeError};
 /// Each step's energies, after checking that its levels and changes are those of the states.
 fn energies(problem: &Problem, params: &SolverParams) -> Vec<StepEnergy> {
     let mut out = Vec::new();
-    let mut before = energy_levels(problem, &thermocontact::model::State::initial(problem));
+    let mut before = energy_levels(problem, &thermocontact::model::State::initial(problem)).unwrap();
     time::run::<TimeError>(problem, params, |state, info| {
         let e = info.energy;
-        let now = energy_levels(problem, state);
+        let now = energy_levels(problem, state).unwrap();
         for (level, change, was, is) in [
             (e.kinetic, e.kinetic_change, before.0, now.0),
             (e.elastic, e.elastic_change, before.1, now.1),
@@ -104,7 +104,7 @@ fn free_body_accounts_for_its_initial_kinetic_energy() {
         .initial_velocity(Datum::expressions(&["y - 0.5", "0.2*x"]).unwrap(), "u₁")
         .build()
         .unwrap();
-    let initial = energy_levels(&problem, &thermocontact::model::State::initial(&problem));
+    let initial = energy_levels(&problem, &thermocontact::model::State::initial(&problem)).unwrap();
     assert!(initial.0 > 1.0, "{initial:?}");
     let e = energies(&problem, &params(LinearKind::Direct, SolverKind::Fast));
     let mut dissipated = 0.0;
@@ -137,7 +137,9 @@ fn insulated_body_heats_by_its_source() {
         .load(LoadTarget::HeatSource, Datum::scalar(g))
         .build()
         .unwrap();
-    let initial = energy_levels(&problem, &thermocontact::model::State::initial(&problem)).2;
+    let initial = energy_levels(&problem, &thermocontact::model::State::initial(&problem))
+        .unwrap()
+        .2;
     let e = energies(&problem, &params(LinearKind::Direct, SolverKind::Fast));
     let (mut sources, mut t) = (0.0, 0.0);
     for e in &e {

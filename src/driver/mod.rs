@@ -195,12 +195,23 @@ pub fn run_observed(
     let ranks = Ranks::of(params)?;
     // Claim the folder before the expensive set-up: a refused folder fails at once. In a
     // distributed run rank 0 claims it.
-    let files = match ranks {
-        Some(ranks) if !ranks.is_root() => None,
-        _ => Files::claim(problem, plan, options, &tally)?,
+    let claimed = match ranks {
+        Some(ranks) if !ranks.is_root() => Ok(None),
+        _ => Files::claim(problem, plan, options, &tally),
     };
-    // Collective in a distributed run (the partition), so that no rank writes into the folder
-    // before rank 0 has claimed it.
+    // Collective in a distributed run: every rank learns whether rank 0 claimed the folder,
+    // and none writes into it before.
+    let files = match ranks {
+        None => claimed?,
+        Some(ranks) => {
+            let (files, local) = match claimed {
+                Ok(files) => (files, Ok(())),
+                Err(error) => (None, Err(error)),
+            };
+            ranks.agree(local, &mut [])?;
+            files
+        }
+    };
     let (layout, layout_seconds) = setup::layout(problem, ranks, options.out_dir.is_some())?;
     let (levels, mut timings) = setup::levels(problem, params)?;
     timings.factorization += layout_seconds;

@@ -56,7 +56,8 @@ pub(super) fn levels<'p>(problem: &'p Problem, params: &SolverParams) -> Result<
 
 /// How this process writes its frames (with the seconds it took): whole (one process, or no
 /// folder), or, as rank r of a distributed run with a folder, the piece of the cells of its
-/// part of the run's partition ([`Ranks::own_cells`]: computed here, collective).
+/// part of the run's partition ([`Ranks::own_cells`]: computed by the problem's build on ranks,
+/// or here, collectively).
 pub(super) fn layout(problem: &Problem, ranks: Option<Ranks>, folder: bool) -> Result<(Layout, f64), Error> {
     let Some(ranks) = ranks.filter(|_| folder) else {
         return Ok((Layout::Whole, 0.0));

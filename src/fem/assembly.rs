@@ -153,13 +153,28 @@ pub fn assemble_cell_materials(
     robin_parts: &[usize],
     robin_coefficient: f64,
 ) -> Matrices {
+    assemble_columns(mesh, materials, (robin_parts, robin_coefficient), None)
+}
+
+/// [`assemble_cell_materials`] with the columns of 𝒦_A, 𝒦_B and G only at the nodes `kept`
+/// marks (all where `None`; the others empty, [`CscMatrix::from_graph_columns`]); ℳ, ℳ_θ and
+/// 𝒦_θ whole (their pattern is the node graph the step matrix's rows are laid out by). The
+/// kept columns are the whole matrices' to the bit: a rank of a distributed run assembles the
+/// columns its rows read (`crate::model::ColumnShare`), the ninety per cent of the values that
+/// sit in those three matrices.
+pub fn assemble_columns(
+    mesh: &Mesh,
+    materials: &CellMaterials,
+    (robin_parts, robin_coefficient): (&[usize], f64),
+    kept: Option<&[bool]>,
+) -> Matrices {
     let d = mesh.dim;
     let nodes_per_cell = mesh.nodes_per_cell();
     let node_cells = NodeCells::new(mesh.n_nodes(), &mesh.cells, nodes_per_cell);
     let graph = NodeGraph::from_node_cells(&node_cells, &mesh.cells, nodes_per_cell);
-    let vector = CscMatrix::from_graph(&graph, d, d);
+    let vector = CscMatrix::from_graph_columns(&graph, d, d, kept);
     let scalar = CscMatrix::from_graph(&graph, 1, 1);
-    let coupling = CscMatrix::from_graph(&graph, d, 1);
+    let coupling = CscMatrix::from_graph_columns(&graph, d, 1, kept);
     // Order: mass (M_ρ: scalar), viscosity, elasticity, coupling, heat mass, conduction. Fresh zeros share the
     // pattern and are not copied: the pages are mapped zero and written once, by the sweep (a
     // clone of the zero template read and wrote 0.5 GB more at 291k unknowns). The norms' Gram
@@ -196,7 +211,14 @@ pub fn assemble_cell_materials(
             // Stored zeros: each page is first written, not read (a read maps the zero page,
             // and the write after it faults a second time).
             node.iter_mut().for_each(|columns| columns.fill(0.0));
-            add_node_columns(mesh, materials, (graph.neighbours(q), node_cells.of(q)), q, &mut node);
+            let vector_columns = kept.is_none_or(|kept| kept[q]);
+            add_node_columns(
+                mesh,
+                materials,
+                (graph.neighbours(q), node_cells.of(q)),
+                (q, vector_columns),
+                &mut node,
+            );
         }
     });
     let [mass, viscosity, elasticity, coupling, heat_mass, mut conduction]: [CscMatrix; 6] =
@@ -220,11 +242,12 @@ const NODES_PER_BLOCK: usize = 2048;
 /// the other, in [`Matrices`]' order) the kernels' columns of q in each of q's cells, in
 /// increasing cell order. `neighbours` are q's sorted neighbours: node p's rows in a column of
 /// q are at k·r, k the place of p among them and r the rows per node ([`CscMatrix::from_graph`]).
+/// Without `vector_columns`, q's columns of 𝒦_A, 𝒦_B and G are not kept ([`assemble_columns`]).
 fn add_node_columns(
     mesh: &Mesh,
     materials: &CellMaterials,
     (neighbours, cells): (&[usize], &[usize]),
-    q: usize,
+    (q, vector_columns): (usize, bool),
     m: &mut [&mut [f64]],
 ) {
     let d = mesh.dim;
@@ -237,6 +260,15 @@ fn add_node_columns(
         let t = Simplex::new(d, &mesh.cell_coords(e));
         let mass = kernels::scalar_mass_column(&t, bq);
         let lap = kernels::laplacian_column(&t, bq);
+        if !vector_columns {
+            for (a, &p) in nodes.iter().enumerate() {
+                let k = neighbours.binary_search(&p).expect("cell nodes are neighbours");
+                m[0][k] += material.density * mass[a];
+                m[4][k] += material.density * material.heat_capacity * mass[a];
+                m[5][k] += material.conductivity * lap[a];
+            }
+            continue;
+        }
         let visc = kernels::isotropic_stiffness_columns(&t, material.viscosity, bq);
         let elast = kernels::isotropic_stiffness_columns(&t, material.elasticity, bq);
         let div = kernels::divergence_coupling_column(&t, bq);

@@ -43,12 +43,29 @@ impl CscMatrix {
     /// finds a node pair's entries in every such matrix with one search, and a node's columns
     /// one after the other ([`ColumnsMut::columns`]).
     pub fn from_graph(graph: &NodeGraph, rows_per_node: usize, cols_per_node: usize) -> Self {
+        Self::from_graph_columns(graph, rows_per_node, cols_per_node, None)
+    }
+
+    /// [`CscMatrix::from_graph`] with only the columns of the nodes `kept` marks (all where
+    /// `None`): the others empty, the kept ones laid out as in the whole pattern. A rank of a
+    /// distributed run keeps the columns its rows read (`crate::model::ColumnShare`).
+    pub fn from_graph_columns(
+        graph: &NodeGraph,
+        rows_per_node: usize,
+        cols_per_node: usize,
+        kept: Option<&[bool]>,
+    ) -> Self {
         let n = graph.n_nodes();
+        debug_assert!(kept.is_none_or(|kept| kept.len() == n));
+        let column_nodes = |q: usize| match kept {
+            Some(kept) if !kept[q] => &[][..],
+            _ => graph.neighbours(q),
+        };
         let mut col_ptr = Vec::with_capacity(n * cols_per_node + 1);
         col_ptr.push(0);
         for q in 0..n {
             for _ in 0..cols_per_node {
-                col_ptr.push(col_ptr[col_ptr.len() - 1] + graph.neighbours(q).len() * rows_per_node);
+                col_ptr.push(col_ptr[col_ptr.len() - 1] + column_nodes(q).len() * rows_per_node);
             }
         }
         let nnz = col_ptr[col_ptr.len() - 1];
@@ -58,14 +75,14 @@ impl CscMatrix {
         let (mut q, mut j, mut k, mut i) = (0, 0, 0, 0);
         let row_idx: Arc<[u32]> = (0..nnz)
             .map(|_| {
-                while k == graph.neighbours(q).len() {
+                while k == column_nodes(q).len() {
                     k = 0;
                     j += 1;
                     if j == cols_per_node {
                         (j, q) = (0, q + 1);
                     }
                 }
-                let row = graph.neighbours(q)[k] * rows_per_node + i;
+                let row = column_nodes(q)[k] * rows_per_node + i;
                 i += 1;
                 if i == rows_per_node {
                     (i, k) = (0, k + 1);

@@ -67,6 +67,7 @@ use serde::{Deserialize, Serialize};
 use super::error::ModelError as Error;
 use super::laws::ContactLaws;
 use super::problem::Problem;
+use super::share::ColumnShare;
 use super::state::State;
 use crate::fem::assembly::{Matrices, VectorMass};
 use crate::la::vector::{dot, norm2};
@@ -174,6 +175,17 @@ impl StepEnergy {
         .fold(0.0, |s, v| s.max(v.abs()))
     }
 
+    /// The terms that read 𝒦_A, 𝒦_B, G or F besides the mechanical forms: a process holding a
+    /// share of the matrices sums them over its own nodes ([`ColumnShare`]).
+    fn read_shared_mut(&mut self) -> [&mut f64; 4] {
+        [
+            &mut self.thermal_stress,
+            &mut self.loads,
+            &mut self.heat_coupling,
+            &mut self.heat_dirichlet,
+        ]
+    }
+
     /// The changes, flows and residuals (every field summed over substeps), in a fixed order.
     fn flows(&self) -> [f64; 16] {
         let mut copy = *self;
@@ -210,42 +222,48 @@ fn relative(value: f64, scale: f64) -> f64 {
     }
 }
 
-/// K, E and H of a state (the levels at its time): three mat-vecs.
-pub fn energy_levels(problem: &Problem, state: &State) -> (f64, f64, f64) {
+/// K, E and H of a state (the levels at its time): three mat-vecs (E summed over the ranks
+/// where a process holds a share of 𝒦_B: collective then, [`ColumnShare`]).
+pub fn energy_levels(problem: &Problem, state: &State) -> Result<(f64, f64, f64), Error> {
     let mats = &problem.matrices;
-    (
+    let elastic = match &problem.columns {
+        None => mats.elasticity.quadratic_form(&state.u),
+        Some(share) => {
+            let b = &mats.elasticity;
+            let mut part = column_forms(b, Some(share), None, [(&b.values[..], &state.u)], [(0, &state.u)]);
+            share.sum(&mut part)?;
+            part[0]
+        }
+    };
+    Ok((
         0.5 * mats.mass.quadratic_form(&state.w),
-        0.5 * mats.elasticity.quadratic_form(&state.u),
+        0.5 * elastic,
         mats.heat_mass.mul(&state.theta).iter().sum(),
-    )
+    ))
 }
 
 /// The energies of the step from `previous` to `state` (module docs), the friction's on the
 /// slip relative to the foundation at t_n ([`ContactLaws::slip`]). One pass over the velocity
 /// matrices' shared pattern gives every quadratic form of ℳ, 𝒦_A and 𝒦_B
 /// (`mechanical_forms`), one gather over G the coupling, one pass over the temperature
-/// pattern ℳ_θ and 𝒦_θ; with the loads at t_n and the laws on Γ_C once.
+/// pattern ℳ_θ and 𝒦_θ; with the loads at t_n and the laws on Γ_C once. Where a process holds
+/// a share of the matrices ([`ColumnShare`]) the terms that read 𝒦_A, 𝒦_B, G or F are its own
+/// nodes' part, summed over the ranks in one reduction: collective then.
 pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result<StepEnergy, Error> {
     let k = state.t - previous.t;
     let (w, u) = (&state.w, &state.u);
+    let share = problem.columns.as_ref();
     let dw: Vec<f64> = w.iter().zip(&previous.w).map(|(a, b)| a - b).collect();
     let du: Vec<f64> = u.iter().zip(&previous.u).map(|(a, b)| a - b).collect();
-    let forms = mechanical_forms(&problem.matrices, w, &dw, u, &du);
+    let mut forms = mechanical_forms(&problem.matrices, share, w, &dw, u, &du);
     let force = problem.force(state.t)?;
     // Gᵀw, whose rows the heat balance needs too: k wᵀGθ = k θ·(Gᵀw).
     let mut coupling = vec![0.0; state.theta.len()];
     problem.matrices.coupling.mul_transpose_add(1.0, w, &mut coupling);
 
-    // ½wᵀℳw − ½w′ᵀℳw′ = wᵀℳΔw − ½ΔwᵀℳΔw, without the difference of two large numbers.
     let mut e = StepEnergy {
-        kinetic: 0.5 * forms.w_mass_w,
-        elastic: 0.5 * forms.u_elastic_u,
-        kinetic_change: forms.w_mass_dw - 0.5 * forms.dw_mass_dw,
-        elastic_change: forms.u_elastic_du - 0.5 * forms.du_elastic_du,
-        numerical: 0.5 * (forms.dw_mass_dw + forms.du_elastic_du),
-        viscous: k * forms.w_viscous_w,
-        thermal_stress: k * dot(&state.theta, &coupling),
-        loads: k * dot(&force, w),
+        thermal_stress: k * owned_dot(share, 1, &state.theta, &coupling),
+        loads: k * owned_dot(share, problem.dim(), &force, w),
         ..StepEnergy::default()
     };
 
@@ -263,16 +281,49 @@ pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result
         }
         friction_heat[node.node] = node.weight * laws.heat(i, norm2(slip));
     }
+    heat_balance(problem, previous, state, &friction_heat, &coupling, &mut e)?;
+    if let Some(share) = share {
+        // The parts of this process's own nodes, summed over the ranks in one reduction.
+        let mut all: Vec<f64> = (forms.values_mut().into_iter().chain(e.read_shared_mut()))
+            .map(|v| *v)
+            .collect();
+        share.sum(&mut all)?;
+        (forms.values_mut().into_iter().chain(e.read_shared_mut()))
+            .zip(all)
+            .for_each(|(v, total)| *v = total);
+    }
+    // ½wᵀℳw − ½w′ᵀℳw′ = wᵀℳΔw − ½ΔwᵀℳΔw, without the difference of two large numbers.
+    e.kinetic = 0.5 * forms.w_mass_w;
+    e.elastic = 0.5 * forms.u_elastic_u;
+    e.kinetic_change = forms.w_mass_dw - 0.5 * forms.dw_mass_dw;
+    e.elastic_change = forms.u_elastic_du - 0.5 * forms.du_elastic_du;
+    e.numerical = 0.5 * (forms.dw_mass_dw + forms.du_elastic_du);
+    e.viscous = k * forms.w_viscous_w;
     e.residual = e.kinetic_change + e.elastic_change + e.numerical + e.viscous + e.frictional + e.thermal_stress
         - e.loads
         - e.foundation;
     e.scale = e.largest_mechanical_term();
-    heat_balance(problem, previous, state, &friction_heat, &coupling, &mut e)?;
+    e.heat_residual =
+        e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
+    e.heat_scale = e.largest_heat_term();
     Ok(e)
 }
 
-/// The heat terms of [`StepEnergy`] (module docs): the heat equation's residual on full vectors,
-/// its fixed rows the reaction Q_D, its free rows R_θ; `coupling` = Gᵀw_n.
+/// a·b over the entries of the nodes this process owns (`per_node` entries per node), all
+/// where it holds the whole matrices (the same bits as [`dot`] then).
+fn owned_dot(share: Option<&ColumnShare>, per_node: usize, a: &[f64], b: &[f64]) -> f64 {
+    match share {
+        None => dot(a, b),
+        Some(share) => (a.iter().zip(b).enumerate())
+            .filter(|&(i, _)| share.owns(i / per_node))
+            .map(|(_, (x, y))| x * y)
+            .sum(),
+    }
+}
+
+/// The heat terms of [`StepEnergy`] (module docs) but its residual and scale: the heat
+/// equation's residual on full vectors, its fixed rows the reaction Q_D; `coupling` = Gᵀw_n.
+/// Q_coup and Q_D over the nodes this process owns where it holds a share of G.
 fn heat_balance(
     problem: &Problem,
     previous: &State,
@@ -297,17 +348,22 @@ fn heat_balance(
         *r += c - g - s - x - friction_heat[p];
     }
     let sum = |v: &[f64]| k * v.iter().sum::<f64>();
+    let owned = |p: usize| problem.columns.as_ref().is_none_or(|share| share.owns(p));
     e.thermal = heat_mass_theta.iter().sum();
     e.thermal_change = heat_mass_dtheta.iter().sum();
     e.heat_sources = sum(&sources);
     e.heat_exchange = sum(&exchange) - sum(&conduction);
     e.heat_friction = sum(friction_heat);
-    e.heat_coupling = sum(coupling);
+    e.heat_coupling = match problem.columns {
+        None => sum(coupling),
+        Some(_) => k * (0..theta.len()).filter(|&p| owned(p)).map(|p| coupling[p]).sum::<f64>(),
+    };
     let fixed = |p: usize| problem.temperature.free[p].is_none();
-    e.heat_dirichlet = k * (0..theta.len()).filter(|&p| fixed(p)).map(|p| residual[p]).sum::<f64>();
-    e.heat_residual =
-        e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
-    e.heat_scale = e.largest_heat_term();
+    e.heat_dirichlet = k
+        * (0..theta.len())
+            .filter(|&p| fixed(p) && owned(p))
+            .map(|p| residual[p])
+            .sum::<f64>();
     Ok(())
 }
 
@@ -323,13 +379,35 @@ struct MechanicalForms {
     du_elastic_du: f64,
 }
 
+impl MechanicalForms {
+    /// The seven forms in their order, to be summed over the ranks.
+    fn values_mut(&mut self) -> [&mut f64; 7] {
+        [
+            &mut self.w_mass_w,
+            &mut self.w_mass_dw,
+            &mut self.dw_mass_dw,
+            &mut self.w_viscous_w,
+            &mut self.u_elastic_u,
+            &mut self.u_elastic_du,
+            &mut self.du_elastic_du,
+        ]
+    }
+}
+
 /// wᵀℳw, wᵀℳΔw, ΔwᵀℳΔw, wᵀ𝒦_A w, uᵀ𝒦_B u, uᵀ𝒦_BΔu, Δuᵀ𝒦_BΔu: one pass over the pattern that
 /// the three matrices share (they are clones of one template; three passes where they do not).
 /// Measured on the 2D reference run's matrices (256 × 64 cells; release, a loaded machine, the
 /// fastest of 200 calls): all of [`step_energy`] 2.7 ms on two threads, 3.4 ms on one, where one
 /// mat-vec with ℳ takes 0.36 ms and one with 𝒦_B 0.37–0.72 ms (the ten mat-vecs this
-/// replaces: ≈ 3.3 ms and more).
-fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64]) -> MechanicalForms {
+/// replaces: ≈ 3.3 ms and more). With a `share`, the columns of the nodes it owns only.
+fn mechanical_forms(
+    mats: &Matrices,
+    share: Option<&ColumnShare>,
+    w: &[f64],
+    dw: &[f64],
+    u: &[f64],
+    du: &[f64],
+) -> MechanicalForms {
     let (m, a, b) = (&mats.mass, &mats.viscosity, &mats.elasticity);
     let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = if same_pattern(a, b)
     {
@@ -337,16 +415,23 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
         let mass = (m, [w, dw]);
         column_forms(
             a,
+            share,
             Some(mass),
             gathers,
             [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)],
         )
     } else {
         let (mw, mdw) = (m.mul(w), m.mul(dw));
-        let [mw, mdw, dmd] = [dot(&mw, w), dot(&mdw, w), dot(&mdw, dw)];
-        let [aw] = column_forms(a, None, [(&a.values[..], w)], [(0, w)]);
+        let d = m.dim;
+        let [mw, mdw, dmd] = [
+            owned_dot(share, d, &mw, w),
+            owned_dot(share, d, &mdw, w),
+            owned_dot(share, d, &mdw, dw),
+        ];
+        let [aw] = column_forms(a, share, None, [(&a.values[..], w)], [(0, w)]);
         let [bu, bdu, dbd] = column_forms(
             b,
+            share,
             None,
             [(&b.values[..], u), (&b.values, du)],
             [(0, u), (0, du), (1, du)],
@@ -379,9 +464,11 @@ type MassGathers<'a> = (&'a VectorMass, [&'a [f64]; 2]);
 /// x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers (A_gᵀ y_g)_c read once for all its forms.
 /// The gathers are ℳ's with `mass` = (ℳ, [y_0, y_1]) (g = 0, 1: ℳ's entries read through the
 /// vector pattern, [`VectorMass::column`]), then `stored[g]` = (values of A_g, y_g) on
-/// the pattern. Blocks of columns in parallel.
+/// the pattern. Blocks of columns in parallel; with a `share`, the columns of its own nodes
+/// only (the pattern's columns per node: its columns over the nodes).
 fn column_forms<const G: usize, const F: usize>(
     pattern: &CscMatrix,
+    share: Option<&ColumnShare>,
     mass: Option<MassGathers>,
     stored: [(&[f64], &[f64]); G],
     forms: [(usize, &[f64]); F],
@@ -389,11 +476,13 @@ fn column_forms<const G: usize, const F: usize>(
     let n = pattern.n_cols;
     let (col_ptr, row_idx) = (&pattern.col_ptr[..], &pattern.row_idx[..]);
     let first_stored = if mass.is_some() { 2 } else { 0 };
+    let per_node = share.map_or(1, |share| n / share.n_nodes());
+    let counted = |c: usize| share.is_none_or(|share| share.owns(c / per_node));
     // The sums of a column sit side by side in 8 slots: ℳ's two and the stored matrices'.
     const { assert!(G + 2 <= 8, "at most six gathers beside ℳ's") };
     let block = |first: usize| {
         let mut sums = [0.0; F];
-        for c in first..(first + BLOCK).min(n) {
+        for c in (first..(first + BLOCK).min(n)).filter(|&c| counted(c)) {
             // The sums side by side: independent chains of multiply-adds (one sum after the
             // other waits on each add, and was slower than the separate mat-vecs).
             let mut column = [0.0; 8];
@@ -472,7 +561,7 @@ mod tests {
                 .collect()
         };
         let (w, dw, u, du) = (rough(1, n), rough(2, n), rough(3, n), rough(4, n));
-        let f = mechanical_forms(mats, &w, &dw, &u, &du);
+        let f = mechanical_forms(mats, None, &w, &dw, &u, &du);
         let close = |a: f64, b: f64| assert!((a - b).abs() <= 1e-13 * b.abs().max(1e-300), "{a} against {b}");
         close(f.w_mass_w, mats.mass.quadratic_form(&w));
         close(f.w_mass_dw, dot(&w, &mats.mass.mul(&dw)));

@@ -126,4 +126,10 @@ pub enum ModelError {
     /// A load that cannot be built or evaluated.
     #[error(transparent)]
     Load(#[from] crate::loads::LoadError),
+    /// A share of the matrices given for another number of nodes than the mesh's.
+    #[error("the owned nodes of a share of the matrices mark {found} nodes, but the mesh has {nodes}")]
+    OwnedNodes { found: usize, nodes: usize },
+    /// A collective operation of a distributed run that failed (MPI, PETSc).
+    #[error("{operation} failed: {detail}")]
+    Ranks { operation: &'static str, detail: String },
 }

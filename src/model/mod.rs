@@ -13,6 +13,8 @@
 //! - [`energy`]: the energies of a step and their balances ([`StepEnergy`]);
 //! - [`plausibility`]: the rigid motions nothing holds, the plausible temperatures;
 //! - [`samples`]: the paper's example (and its 3D counterpart) as builder calls;
+//! - [`ColumnShare`]: a rank's share of the matrices in a distributed run (the columns its rows
+//!   read) and the sum of its part of the energies over the ranks;
 //! - `DistributedStepMatrix` (feature `mpi`): the step matrix as a PETSc matrix distributed
 //!   by rows over the ranks, and its solve.
 
@@ -27,6 +29,7 @@ pub mod plausibility;
 mod pressure;
 mod problem;
 pub mod samples;
+mod share;
 mod state;
 mod step_matrix;
 pub mod thermal;
@@ -41,6 +44,7 @@ pub use laws::{
 };
 pub use pressure::ContactPressure;
 pub use problem::*;
+pub use share::ColumnShare;
 pub use state::State;
 pub use step_matrix::{
     assemble_by_columns, ordered_rows, ordered_rows_at, ordered_rows_range, rows_of_symmetric_form,

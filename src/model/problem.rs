@@ -37,6 +37,7 @@
 use super::error::ModelError as Error;
 use super::laws::{Friction, Heating};
 use super::pressure::ContactPressure;
+use super::share::ColumnShare;
 use super::thermal::{self, ThermalBoundary, ThermalCondition};
 use crate::contact::frames::{contact_frames, orthogonal_complement};
 use crate::contact::{
@@ -192,6 +193,10 @@ pub struct Problem {
     /// ([`Problem::partition`]).
     #[cfg(feature = "mpi")]
     partition: std::sync::OnceLock<crate::partition::MeshPartition>,
+    /// This process's share of 𝒦_A, 𝒦_B and G (the columns its rows read) where it holds
+    /// part of them, as a rank of a distributed run does (`ProblemBuilder::on_ranks`, feature `mpi`);
+    /// `None`: the whole matrices.
+    pub columns: Option<ColumnShare>,
 }
 
 /// Loads that vary in space and time given as code, added to the data loads: a body force
@@ -234,6 +239,18 @@ pub struct ProblemBuilder {
     /// Nodal initial fields that replace the three data above (a checkpoint of another run).
     initial_fields: Option<(InitialFields, &'static str)>,
     extra_loads: Option<Box<dyn ExtraLoads>>,
+    /// Whose share of the matrices to assemble ([`ProblemBuilder::owned_nodes`],
+    /// [`ProblemBuilder::on_ranks`]); `None`: the whole.
+    share: Option<ShareOf>,
+}
+
+/// The process a [`ProblemBuilder`] assembles a share of the matrices for.
+enum ShareOf {
+    /// The nodes given, the energies' parts not summed (tests).
+    Nodes(Vec<bool>),
+    /// This rank of a distributed run: its nodes those the run's partition gives it.
+    #[cfg(feature = "mpi")]
+    Rank(crate::la::mpi::Communicator),
 }
 
 /// A friction law as given to the builder: (part name or `None` for all, scale, law, what
@@ -279,7 +296,27 @@ impl ProblemBuilder {
             ],
             initial_fields: None,
             extra_loads: None,
+            share: None,
         }
+    }
+
+    /// This rank's share of the matrices in a distributed run over `comm` (more than one rank):
+    /// the mesh is partitioned at the start of [`ProblemBuilder::build`] (collective; the
+    /// partition kept as [`Problem::partition`]'s), and of 𝒦_A, 𝒦_B and G only the columns the
+    /// rank's rows read are assembled ([`ColumnShare`]); the energies' parts are summed over
+    /// the ranks. One rank: the whole problem.
+    #[cfg(feature = "mpi")]
+    pub fn on_ranks(mut self, comm: crate::la::mpi::Communicator) -> Self {
+        self.share = (comm.size() > 1).then_some(ShareOf::Rank(comm));
+        self
+    }
+
+    /// The share of the matrices of a process owning the nodes `owned` ([`ColumnShare`]),
+    /// its energies its own part alone: what a rank holds, without ranks (for tests of the
+    /// share against the whole problem).
+    pub fn owned_nodes(mut self, owned: Vec<bool>) -> Self {
+        self.share = Some(ShareOf::Nodes(owned));
+        self
     }
 
     /// The cells of the mesh's cell region `name` (a Gmsh physical group of dimension d) take
@@ -553,7 +590,33 @@ impl ProblemBuilder {
         let temperature = TemperatureSpace::new(&thermal.fixed);
 
         let (k_e, theta_r) = self.exchange.robin().unwrap_or((0.0, 0.0));
-        let mut matrices = assembly::assemble_cell_materials(&mesh, &materials, &parts.contact, k_e);
+        #[cfg(feature = "mpi")]
+        let partition = std::sync::OnceLock::new();
+        let columns = match self.share {
+            None => None,
+            Some(ShareOf::Nodes(owned)) => {
+                if owned.len() != mesh.n_nodes() {
+                    return Err(Error::OwnedNodes {
+                        found: owned.len(),
+                        nodes: mesh.n_nodes(),
+                    });
+                }
+                Some(ColumnShare::new(&mesh, owned, &mesh.nodes_on(&parts.contact)))
+            }
+            #[cfg(feature = "mpi")]
+            Some(ShareOf::Rank(comm)) => {
+                let split = crate::partition::MeshPartition::on_root(&comm, &mesh).map_err(|e| Error::Ranks {
+                    operation: "the partition of the mesh",
+                    detail: e.to_string(),
+                })?;
+                let owned = split.node_owner.iter().map(|&r| r == comm.rank()).collect();
+                let share = ColumnShare::new(&mesh, owned, &mesh.nodes_on(&parts.contact));
+                let _ = partition.set(split);
+                Some(share.over_ranks(comm))
+            }
+        };
+        let kept = columns.as_ref().map(ColumnShare::kept);
+        let mut matrices = assembly::assemble_columns(&mesh, &materials, (&parts.contact, k_e), kept);
         thermal.boundary.add_convection(&mesh, &mut matrices.conduction);
         let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
         let contact: Vec<ContactNode> = frames
@@ -686,7 +749,8 @@ impl ProblemBuilder {
             extra_loads: self.extra_loads,
             build_seconds: clock.elapsed().as_secs_f64(),
             #[cfg(feature = "mpi")]
-            partition: std::sync::OnceLock::new(),
+            partition,
+            columns,
         })
     }
 }

@@ -59,6 +59,11 @@ pub fn paper_builder(nx: usize, ny: usize, steps: usize) -> ProblemBuilder {
 /// (0, 10) with `cells` cells, clamped at x = 0, a traction (0, 0, −800 t) on z = 10, contact on
 /// z = 0, the 2D example's material, laws and gravity (0, 0, −10).
 pub fn paper_3d(cells: [usize; 3], steps: usize) -> Result<Problem, ModelError> {
+    paper_3d_builder(cells, steps).build()
+}
+
+/// [`paper_3d`]'s builder.
+pub fn paper_3d_builder(cells: [usize; 3], steps: usize) -> ProblemBuilder {
     let mesh = mesh::cuboid([40.0, 10.0, 10.0], cells);
     with_paper_data(
         ProblemBuilder::new(mesh, paper_material(), TimeGrid::new(1.0, steps)),
@@ -71,7 +76,6 @@ pub fn paper_3d(cells: [usize; 3], steps: usize) -> Result<Problem, ModelError> 
         LoadTarget::Traction("z+".into()),
         Datum::affine(vec![0.0; 3], vec![0.0, 0.0, -800.0]),
     )
-    .build()
 }
 
 /// The example's laws and data in `d` dimensions: θ_D = θ₀ = 25, heat exchange k_e = 2 against

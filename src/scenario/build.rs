@@ -576,7 +576,24 @@ impl Scenario {
 
     /// The discrete problem of the scenario.
     pub fn build(&self) -> Result<Problem, Error> {
-        self.builder()?.build().map_err(|e| match e {
+        self.build_from(self.builder()?)
+    }
+
+    /// [`Scenario::build`] (or, `continued`, [`Scenario::build_continued`]) on rank
+    /// `comm.rank()` of a distributed run: its share of the matrices
+    /// ([`ProblemBuilder::on_ranks`]; collective).
+    #[cfg(feature = "mpi")]
+    pub fn build_on_ranks(&self, continued: bool, comm: crate::la::mpi::Communicator) -> Result<Problem, Error> {
+        let mut scenario = self.clone();
+        if continued {
+            scenario.initial.from = None;
+        }
+        scenario.build_from(scenario.builder()?.on_ranks(comm))
+    }
+
+    /// The problem of `builder`, its errors named by the scenario's keys.
+    fn build_from(&self, builder: ProblemBuilder) -> Result<Problem, Error> {
+        builder.build().map_err(|e| match e {
             ModelError::CurvedSymmetryPart { part } => {
                 invalid("boundary.symmetry", &part, "flat parts (a symmetry plane)")
             }
