@@ -15,9 +15,10 @@
 //! name any row, PETSc sums repeated pairs across ranks (`la::mpi`'s test assembles a Laplacian
 //! so, by elements split over the ranks).
 //!
-//! What is replicated in this foundation: every rank builds the whole [`Problem`] (its P1
-//! matrices, E^h, Γ_C), as rank 0 does, and keeps A's rows of its own unknowns only. Where
-//! this stops scaling and what replaces it: docs/distributed.md.
+//! What is replicated in this foundation: every rank builds the [`Problem`] (E^h, Γ_C, the
+//! mesh) as rank 0 does, with its share of the P1 matrices (of 𝒦_A, 𝒦_B and G the columns its
+//! rows read: [`super::ColumnShare`]), and keeps A's rows of its own unknowns only. Where this
+//! stops scaling and what replaces it: docs/distributed.md.
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix), [`crate::partition`] (the layout).
 

@@ -1,8 +1,9 @@
 //! The iterative path's Krylov solves on PETSc over the MPI ranks of a distributed run (cargo
 //! feature `mpi`, `mpirun -n P thermocontact run`; docs/distributed.md).
 //!
-//! **What is distributed, what is replicated.** Every rank holds the whole problem and the
-//! Newton iterates x, w, ξ (vectors of N and of Γ_C: 8 bytes per unknown each). Of the ordered
+//! **What is distributed, what is replicated.** Every rank holds the problem, with of 𝒦_A, 𝒦_B
+//! and G only the columns its rows read ([`crate::model::ColumnShare`]), and the Newton
+//! iterates x, w, ξ (vectors of N and of Γ_C: 8 bytes per unknown each). Of the ordered
 //! step matrix Ã of [`super::iterative`] a rank assembles only its own rows and the Γ_C rows
 //! ([`RankRows::assembled`]), and keeps only the Γ_C rows after set-up: each linearization
 //! changes them in place on every rank, the same way from the same iterate. The Krylov solve,
@@ -25,11 +26,10 @@
 //! is O(|Γ_C|) and the stop tests O(N) per iteration against the Krylov solve's O(N) per
 //! Krylov iteration times 5–30 iterations: replicated, they cost little, and the ranks cannot
 //! disagree on a branch (a rank that stops its loop while another iterates would hang in the
-//! next collective call). What replication costs is memory (the problem's matrices on every
-//! rank: 1.5 of a rank's 2.4 GiB at 972k unknowns) and a gather of N values per Newton
-//! iteration; docs/distributed.md gives the figures and what ends them (each rank holding the
-//! matrices' columns of its own and ghost nodes, with the law on owned Γ_C nodes and reductions
-//! for the tests).
+//! next collective call). What replication costs is memory (what every rank holds whole: 525
+//! bytes per unknown, 0.49 of a rank's 1.55 GiB at 972k unknowns on 2 ranks) and a gather of N
+//! values per Newton iteration; docs/distributed.md gives the figures and what ends them (the
+//! law on owned Γ_C nodes, ghost updates and reductions for the tests).
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
