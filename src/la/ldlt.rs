@@ -58,6 +58,20 @@
 //! outputs move by up to 6e-7 and its heat balance closes to 1.3e-5 instead of 6e-13: not the
 //! same solution. The condensation would keep an f64 trailing block in any case
 //! (docs/linear-algebra-study.md, issue 28 item 3).
+//!
+//! **Rejected: the full sweeps on both cores by subtrees** (measured 2026-11-27). A supernode's
+//! pattern rows are its ancestors', so disjoint subtrees of the supernodal elimination tree
+//! can be swept side by side: forward, each adding to its ancestors' positions in a buffer of
+//! its own (summed in a fixed order: other bits than one sweep, the same on any thread count);
+//! backward, once the top of the tree is done, each reading it (the same bits). On the 2D
+//! reference factor (256 × 64), splitting the heaviest subtree while it held more than half of
+//! the subtrees' entries gave 20 subtrees with 69 % of L's entries (the largest 2.0 of 6.2 M),
+//! the top 31 % (the separators and the trailing block) swept alone. One full solve took 5.56
+//! against 6.78 ms (1.22×, the best of five rounds of twenty): the two cores share this
+//! machine's memory bandwidth, so the subtrees' part ran 1.35× faster, not 2×. In the runs it
+//! was within the noise: the reference run's solves 0.80–0.95 s against 0.90–1.00 s, the 3D
+//! example's (direct path) 1.43–1.52 s against 1.55–1.57 s, two or three interleaved runs each.
+//! Not kept for that, with the forward sweep's bits changed.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
