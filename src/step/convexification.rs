@@ -16,7 +16,7 @@
 //! tolerance ([`InnerTolerance::Fixed`]). The Newton-type inner solvers need each convex problem
 //! solved only as far as the loop is converged: to 1 % of the loop's smallest change so far,
 //! never looser than a ceiling nor tighter than a floor ([`InnerTolerance::Adaptive`]). The
-//! direct path's ceiling is 10⁻⁴; the iterative path's is 10⁻², where every inner Newton
+//! direct path's ceiling is 10⁻⁴; the iterative path's is 10⁻³, where every inner Newton
 //! iteration is a Krylov solve ([`super::newton_krylov`] has the measurements).
 //!
 //! Depends on: the step's figures and failures ([`super::StepInfo`], [`super::StepFailure`]).
