@@ -260,6 +260,9 @@ fn add_node_columns(
         let t = Simplex::new(d, &mesh.cell_coords(e));
         let mass = kernels::scalar_mass_column(&t, bq);
         let lap = kernels::laplacian_column(&t, bq);
+        // A node whose vector columns are not kept sums the three scalar matrices alone. (One
+        // loop with the vector kernels optional was 10–25 % slower at 972k unknowns in one
+        // process: 1.60–1.91 s against 1.43–1.78 s.)
         if !vector_columns {
             for (a, &p) in nodes.iter().enumerate() {
                 let k = neighbours.binary_search(&p).expect("cell nodes are neighbours");
