@@ -303,6 +303,27 @@ mod ranks {
         )
     }
 
+    /// This rank's problem in a distributed run: its share of the matrices (`continued`: from
+    /// its checkpoint, as `Scenario::build_continued`); collective.
+    pub fn build_share(
+        scenario: &thermocontact::scenario::Scenario,
+        continued: bool,
+    ) -> anyhow::Result<thermocontact::model::Problem> {
+        #[cfg(feature = "mpi")]
+        {
+            let comm = thermocontact::la::mpi::Communicator::world()?;
+            Ok(scenario.build_on_ranks(continued, comm)?)
+        }
+        // `start` refuses more than one rank without MPI: no share to build.
+        #[cfg(not(feature = "mpi"))]
+        {
+            let _ = (scenario, continued);
+            anyhow::bail!(
+                "started over several ranks, but this build has no MPI: build thermocontact with `--features mpi`"
+            )
+        }
+    }
+
     /// Ends the process after an error: one process prints it and exits with `code`. In a
     /// distributed run the ranks meet the same error from the same numbers, so rank 0 prints it
     /// and ends every rank (`MPI_Abort`); another rank waits for that, and ends every rank with
@@ -613,19 +634,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             // checkpoint may be gone; its name still counts in the scenario's fingerprint).
             // A rank of a distributed run builds its share of the matrices (the columns its
             // rows read: `model::ColumnShare`).
-            #[cfg(feature = "mpi")]
             let problem = if size > 1 {
-                let comm = thermocontact::la::mpi::Communicator::world()?;
-                scenario.build_on_ranks(restart.is_some(), comm)?
+                ranks::build_share(&scenario, restart.is_some())?
             } else if restart.is_some() {
                 scenario.build_continued()?
             } else {
                 scenario.build()?
-            };
-            #[cfg(not(feature = "mpi"))]
-            let problem = match &restart {
-                Some(_) => scenario.build_continued()?,
-                None => scenario.build()?,
             };
             if root && replace_completed && !overwrite && thermocontact::output::folder::holds_completed_run(&out) {
                 println!(

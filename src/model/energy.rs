@@ -354,10 +354,7 @@ fn heat_balance(
     e.heat_sources = sum(&sources);
     e.heat_exchange = sum(&exchange) - sum(&conduction);
     e.heat_friction = sum(friction_heat);
-    e.heat_coupling = match problem.columns {
-        None => sum(coupling),
-        Some(_) => k * (0..theta.len()).filter(|&p| owned(p)).map(|p| coupling[p]).sum::<f64>(),
-    };
+    e.heat_coupling = k * (0..theta.len()).filter(|&p| owned(p)).map(|p| coupling[p]).sum::<f64>();
     let fixed = |p: usize| problem.temperature.free[p].is_none();
     e.heat_dirichlet = k
         * (0..theta.len())

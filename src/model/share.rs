@@ -90,11 +90,6 @@ impl ColumnShare {
         &self.kept
     }
 
-    /// The number of nodes whose columns this process holds.
-    pub fn n_kept(&self) -> usize {
-        self.kept.iter().filter(|&&k| k).count()
-    }
-
     /// `parts` summed over the processes, in place (collective over the ranks: every rank
     /// calls it at the same point with as many values).
     pub fn sum(&self, parts: &mut [f64]) -> Result<(), ModelError> {
