@@ -51,10 +51,13 @@ impl Ranks {
         {
             let comm = crate::la::mpi::Communicator::world().map_err(crate::step::StepError::from)?;
             let partition = problem.partition(&comm).map_err(crate::step::StepError::from)?;
-            Ok((partition.cell_part.iter().enumerate())
+            let mut cells: Vec<usize> = (partition.cell_part.iter().enumerate())
                 .filter(|&(_, &part)| part == self.rank)
                 .map(|(cell, _)| cell)
-                .collect())
+                .collect();
+            // Kept by the frames' piece for the run: without the doubling's spare capacity.
+            cells.shrink_to_fit();
+            Ok(cells)
         }
         #[cfg(not(feature = "mpi"))]
         Ok((0..problem.mesh.n_cells()).collect())

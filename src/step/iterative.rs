@@ -128,10 +128,10 @@ fn sweep_order(problem: &Problem) -> (Vec<usize>, [usize; 2], usize) {
     let first = in_part(Part::First).count();
     let second = first + in_part(Part::Second).count();
     let first_contact = n - tangential.len();
-    let order = (in_part(Part::First).chain(in_part(Part::Second)))
-        .chain(in_part(Part::Separator))
-        .chain(tangential)
-        .collect();
+    // Sized once (kept for the run; collected from filters it would grow by doubling).
+    let mut order = Vec::with_capacity(n);
+    order.extend(in_part(Part::First).chain(in_part(Part::Second)));
+    order.extend(in_part(Part::Separator).chain(tangential));
     (order, [first, second], first_contact)
 }
 
