@@ -22,6 +22,9 @@ impl Preconditioner for Ilu0 {
 /// Stored for its sweeps: L and U in separate arrays, so that each sweep streams only its own
 /// half, with 32-bit column indices and U's inverted diagonal. Measured at 98k unknowns: one
 /// solve 5 ms, against 26 ms with L and U left interleaved in A's rows (docs/krylov-study.md, §5).
+/// Only the columns read from A's rows (the values apart, as here) still cost 1.5× in the sweeps
+/// (26 M entries: 41–49 ms against 24–31 ms, 2026-11-27), so the factor keeps its own columns,
+/// half of its bytes (docs/distributed.md).
 ///
 /// The off-diagonal values are kept in single precision (the sweeps sum in double). A sweep reads
 /// each entry once and does two flops with it, so it runs at the memory's speed, and at 3·10⁵

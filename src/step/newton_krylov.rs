@@ -137,6 +137,14 @@
 //!   (11.75 → 9.25 iterates) on the 3D example with S = 8 at 134k unknowns, 88.5 → 80.75 on the
 //!   example at 47k and k = 1/8, the same slip counts; where it is short the rule does not fire
 //!   (5.75 and 9.5 at 47k and 291k, unchanged).
+//! - an earlier way out, for the crawl at 47k and k = 1/8 (2026-11-27): the bounds of each
+//!   iterate of step 3 lie 0.013–0.27 of the largest bound from the iterate before and
+//!   0.70–0.78 (a node's whole fall) from every iterate 10 or more before, so the loop does not
+//!   cycle (its stick/slip pattern keeps moving) and no cycle test can stop it early; and
+//!   Newton on the law after 30 or 60 iterates instead of 200 (`solver.max_convexification`)
+//!   saves 228 or 193 Newton iterations in step 3 but fails from the step's start on the
+//!   unloading steps 6–8, which the loop solves in 33–102 iterates: the run stops after
+//!   cutbacks to k/32.
 //!
 //! What the iterations follow is the slip front: a node that starts slipping keeps its frozen
 //! static bound for that iterate, and its neighbours see its weakened bound only in the next,
