@@ -48,8 +48,8 @@ impl GridPiece {
             *l = points_of_grid.len();
             points_of_grid.push(p);
         }
-        // Sized once: collected from a flat map it grew by doubling, to 1.5 times its length
-        // (a rank's piece of a 10⁶-unknown mesh: 32 MiB for 22 MiB of entries).
+        // Sized once: collected from a flat map it grew by doubling and kept up to twice its
+        // length (a rank's piece of a 10⁶-unknown mesh: 32 MiB for 22 MiB of entries).
         let mut connectivity = Vec::with_capacity(cells.len() * npc);
         for &c in &cells {
             connectivity.extend(grid.cells[c * npc..(c + 1) * npc].iter().map(|&p| local[p]));
