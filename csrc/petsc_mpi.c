@@ -145,6 +145,9 @@ struct tc_dist {
   /* The scatter of x to every rank and its whole copy, made at the first tc_dist_all_gather. */
   VecScatter to_all;
   Vec        whole;
+  /* The scatter of the entries of x this rank selected (tc_dist_select) and their copy. */
+  VecScatter to_selected;
+  Vec        selected;
   /* The caller's preconditioner of this rank's block (preconditioner 2), set for the length of
    * one tc_dist_solve_from: z = M_r^-1 r on the owned entries, 0 on success. */
   int (*block_apply)(void *ctx, const double *r, double *z, int n);
@@ -157,6 +160,8 @@ void tc_dist_destroy(tc_dist *dist)
   if (!dist) return;
   VecScatterDestroy(&dist->to_all);
   VecDestroy(&dist->whole);
+  VecScatterDestroy(&dist->to_selected);
+  VecDestroy(&dist->selected);
   KSPDestroy(&dist->ksp);
   MatDestroy(&dist->A);
   VecDestroy(&dist->b);
@@ -426,6 +431,47 @@ int tc_dist_all_gather(tc_dist *dist, double *all)
   PetscCall(VecGetArrayRead(dist->whole, &x));
   memcpy(all, x, (size_t)n * sizeof(double));
   PetscCall(VecRestoreArrayRead(dist->whole, &x));
+  PetscFunctionReturn(0);
+}
+
+/* Selects the n entries of the solution at the global indices `indices` (each rank its own,
+ * any rank's entries) for tc_dist_gather_selected: PETSc's scatter from x to a sequential vector
+ * on this rank, made here once; collective. */
+static PetscErrorCode tc_dist_select_setup(tc_dist *dist, int n, const int *indices)
+{
+  IS        from;
+  PetscInt *idx;
+  PetscFunctionBeginUser;
+  PetscCall(VecScatterDestroy(&dist->to_selected));
+  PetscCall(VecDestroy(&dist->selected));
+  PetscCall(PetscMalloc1(n, &idx));
+  for (int e = 0; e < n; ++e) idx[e] = indices[e];
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n, idx, PETSC_OWN_POINTER, &from));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &dist->selected));
+  PetscCall(VecScatterCreate(dist->x, from, dist->selected, NULL, &dist->to_selected));
+  PetscCall(ISDestroy(&from));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_select(tc_dist *dist, int n, const int *indices)
+{
+  return (int)tc_dist_select_setup(dist, n, indices);
+}
+
+/* The selected entries of the last solution (tc_dist_select) into `out`, in the order they were
+ * selected; collective. */
+int tc_dist_gather_selected(tc_dist *dist, double *out)
+{
+  const PetscScalar *x;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  PetscCheck(dist->to_selected, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no entries selected (tc_dist_select)");
+  PetscCall(VecScatterBegin(dist->to_selected, dist->x, dist->selected, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(dist->to_selected, dist->x, dist->selected, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(dist->selected, &n));
+  PetscCall(VecGetArrayRead(dist->selected, &x));
+  memcpy(out, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(dist->selected, &x));
   PetscFunctionReturn(0);
 }
 

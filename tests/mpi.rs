@@ -190,6 +190,16 @@ mod distributed {
         }
         let whole = matrix.gather_on_root(comm).unwrap();
         assert_eq!(whole.map(|w| w.len()), comm.is_root().then_some(n));
+        // Entries of any rank, a different selection on each, in no order: their exact values.
+        let selected = [n - 1 - rank, 0, (7 * rank + 3) % n, n / 2];
+        matrix.select(&selected).unwrap();
+        let mut values = [0.0; 4];
+        matrix.gather_selected(&mut values).unwrap();
+        for (i, u) in selected.iter().zip(values) {
+            let x = (i + 1) as f64 * h;
+            assert!((u - x * (1.0 - x) / 2.0).abs() < 1e-11, "selected u({x}) = {u}");
+        }
+        assert!(matrix.select(&[n]).is_err());
         let (mut ptr, mut cols, mut values) = (vec![0], vec![], vec![]);
         for i in matrix.owned() {
             for j in [i.checked_sub(1), Some(i), Some(i + 1).filter(|&j| j < n)]

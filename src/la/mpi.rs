@@ -120,6 +120,8 @@ extern "C" {
         reason: *mut c_int,
     ) -> c_int;
     fn tc_dist_all_gather(dist: *mut RawDist, all: *mut c_double) -> c_int;
+    fn tc_dist_select(dist: *mut RawDist, n: c_int, indices: *const c_int) -> c_int;
+    fn tc_dist_gather_selected(dist: *mut RawDist, out: *mut c_double) -> c_int;
     fn tc_dist_destroy(dist: *mut RawDist);
     fn tc_ghost_create(n_owned: c_int, n_ghost: c_int, ghosts: *const c_int, out: *mut *mut RawVec) -> c_int;
     fn tc_ghost_set_and_update(v: *mut RawVec, owned: *const c_double) -> c_int;
@@ -419,6 +421,8 @@ pub struct DistributedMatrix {
     n_global: usize,
     n_coo: usize,
     krylov: Option<DistributedKrylov>,
+    /// How many entries this rank selected ([`DistributedMatrix::select`]).
+    n_selected: Option<usize>,
     /// The arrays PETSc keeps this rank's rows in, where they are this crate's
     /// ([`DistributedMatrix::from_split`]): never read here, only kept until PETSc's matrix is
     /// destroyed (dropped after [`Drop::drop`]).
@@ -502,6 +506,7 @@ impl DistributedMatrix {
             n_global,
             n_coo,
             krylov: None,
+            n_selected: None,
             _storage: None,
         })
     }
@@ -789,6 +794,41 @@ impl DistributedMatrix {
             )
         })?;
         solved(params, iterations, residual, reason)
+    }
+
+    /// Selects the entries of the solution at the global `indices` (each rank its own, any
+    /// rank's entries, in any order) that [`DistributedMatrix::gather_selected`] brings to this
+    /// rank: PETSc's scatter from the solution to a vector of this rank, made here once (a
+    /// second call replaces it); collective.
+    pub fn select(&mut self, indices: &[usize]) -> Result<(), Error> {
+        const OPERATION: &str = "VecScatterCreate";
+        if let Some(&i) = indices.iter().find(|&&i| i >= self.n_global) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("entry {i} of a solution of {} entries", self.n_global),
+            });
+        }
+        let n = index32(OPERATION, indices.len())?;
+        let indices: Vec<c_int> = indices.iter().map(|&i| i as c_int).collect();
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle; n indices, each below n_global (checked), read during the call.
+        check(OPERATION, unsafe {
+            tc_dist_select(self.handle.as_ptr(), n, indices.as_ptr())
+        })?;
+        self.n_selected = Some(indices.len());
+        Ok(())
+    }
+
+    /// The last solution's entries that this rank selected ([`DistributedMatrix::select`]),
+    /// in their order, into `out`; collective. A part of the solution instead of all of it
+    /// ([`DistributedMatrix::all_gather`]): what a rank reads besides its own entries.
+    pub fn gather_selected(&mut self, out: &mut [f64]) -> Result<(), Error> {
+        assert_eq!(Some(out.len()), self.n_selected, "one value per selected entry");
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle with a selection of out.len() entries (asserted).
+        check("VecScatter", unsafe {
+            tc_dist_gather_selected(self.handle.as_ptr(), out.as_mut_ptr())
+        })
     }
 
     /// The last solution, whole, on every rank (PETSc's scatter to all, made once); collective.

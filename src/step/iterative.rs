@@ -351,6 +351,20 @@ impl KrylovSystem {
         }
     }
 
+    /// x (the system's order) whole after the solves of a step: in a distributed run each solve
+    /// leaves x the iterate only where the Newton iterations read it ([`super::ranks::RankKrylov::solve`]),
+    /// and this gathers the rest (collective); in one process x is whole already.
+    pub(super) fn whole(&self, solver: &mut KrylovSolver, x: &mut [f64]) -> Result<(), LaError> {
+        match solver {
+            KrylovSolver::Process(_) => {
+                let _ = x;
+                Ok(())
+            }
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(ranks) => ranks.gather_whole(x),
+        }
+    }
+
     /// The start of a step from `previous` to time `t`, in this system's order: b (its linear
     /// part, without the contact terms; a nonlinear heat exchange at `exchange_at`) and the
     /// previous step's unknowns, the first iterate.

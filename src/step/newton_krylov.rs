@@ -461,7 +461,7 @@ impl<'a> NewtonKrylov<'a> {
                 ceiling: INNER_CEILING,
             },
         };
-        let iterate = match convexify(&mut newton, start(x), &params, &mut info) {
+        let mut iterate = match convexify(&mut newton, start(x), &params, &mut info) {
             Ok(iterate) => iterate,
             Err(SolveError::NotConverged(failure)) => {
                 let (_, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
@@ -472,6 +472,7 @@ impl<'a> NewtonKrylov<'a> {
             }
             Err(other) => return Err(other),
         };
+        sys.whole(solver, &mut iterate.x)?;
         drop(guard);
         let mut x_unknowns = vec![0.0; n];
         sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);

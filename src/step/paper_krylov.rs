@@ -159,6 +159,8 @@ impl KrylovStep<'_> {
             &mut self.residual,
             clock,
         )?;
+        // The state reads every row of the sum (over the ranks: gathered whole).
+        self.system.whole(self.solver, &mut self.y)?;
         self.x.iter_mut().zip(&self.y).for_each(|(x, y)| *x += y);
         Ok(())
     }

@@ -17,19 +17,22 @@
 //! with block Jacobi (one block per rank) or GAMG, from the previous iterate as the serial
 //! solves do. Each rank's unknowns are numbered in the system's order, so its block has its
 //! Γ_C rows last and its ILU(0) is the serial path's: single precision, refactored only from the
-//! first row a linearization changes ([`RankBlock`]). The solution is gathered on every rank
-//! (PETSc's scatter to all), so that the nodal law, the stop tests, the slip counts and the
-//! cutback decision are computed from the same numbers on every rank and agree without a
-//! reduction: the ranks take the same branches by construction.
+//! first row a linearization changes ([`RankBlock`]). Of the solution each rank takes its own
+//! rows and gathers those the next linearization reads, the columns of Ã's Γ_C rows (the same
+//! on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
+//! and the cutback decision are computed from the same numbers on every rank and agree without
+//! a reduction: the ranks take the same branches by construction. The whole solution is
+//! gathered once per step, for the state ([`RankKrylov::gather_whole`]).
 //!
 //! **Why replicate the iterates rather than distribute the Newton method too.** The nodal law
-//! is O(|Γ_C|) and the stop tests O(N) per iteration against the Krylov solve's O(N) per
-//! Krylov iteration times 5–30 iterations: replicated, they cost little, and the ranks cannot
+//! and the stop tests read Γ_C's unknowns and their neighbours', O(|Γ_C|) per Newton iteration,
+//! against the Krylov solve's O(N) per Krylov iteration times 5–30 iterations: replicated, they
+//! cost little, and the ranks cannot
 //! disagree on a branch (a rank that stops its loop while another iterates would hang in the
 //! next collective call). What replication costs is memory (what every rank holds whole: 525
 //! bytes per unknown, 0.49 of a rank's 1.55 GiB at 972k unknowns on 2 ranks) and a gather of N
-//! values per Newton iteration; docs/distributed.md gives the figures and what ends them (the
-//! law on owned Γ_C nodes, ghost updates and reductions for the tests).
+//! values per step; docs/distributed.md gives the figures and what ends them (the law on owned
+//! Γ_C nodes, ghost updates and reductions for the tests).
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
@@ -57,6 +60,10 @@ pub(crate) struct RankKrylov {
     first_changing: usize,
     /// This rank's rows that a linearization changes, as PETSc's matrix gets them.
     changing: Box<ChangingRows>,
+    /// The rows of x (the system's order) that a linearization reads besides this rank's own:
+    /// the columns of Ã's rows from `first_changing` on, gathered after each solve
+    /// ([`RankKrylov::solve`]), and a buffer of their values.
+    read: (Vec<usize>, Vec<f64>),
 }
 
 /// A rank's rows of Ã that a linearization changes (its last, in the system's order): their
@@ -244,7 +251,7 @@ impl RankKrylov {
             }
             _ => (diagonal, None),
         };
-        let matrix = DistributedMatrix::from_split(&comm, diagonal, off_diagonal)?;
+        let mut matrix = DistributedMatrix::from_split(&comm, diagonal, off_diagonal)?;
         let changing = &rows.owned[first..];
         let (mut ptr, mut cols) = (vec![0], Vec::new());
         for &row in changing {
@@ -257,6 +264,14 @@ impl RankKrylov {
             pattern: matrix.row_pattern(&globals, &ptr, &cols)?,
             values: Vec::with_capacity(cols.len()),
         });
+        let mut read: Vec<usize> = (first_changing..a.n())
+            .flat_map(|row| a.row(row).0.iter().map(|&c| c as usize))
+            .collect();
+        read.sort_unstable();
+        read.dedup();
+        matrix.select(&read.iter().map(|&row| rows.global_of_row[row]).collect::<Vec<_>>())?;
+        let values = vec![0.0; read.len()];
+        let read = (read, values);
         let solver = RankKrylov {
             matrix,
             rows,
@@ -265,6 +280,7 @@ impl RankKrylov {
             block,
             first_changing,
             changing,
+            read,
         };
         Ok((solver, a))
     }
@@ -296,8 +312,13 @@ impl RankKrylov {
         self.matrix.set_rows(pattern, values)
     }
 
-    /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x whole, in the system's order, the same
-    /// on every rank), x replaced by the solution on every rank; collective.
+    /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x in the system's order, the same on
+    /// every rank at the rows it reads: its own), x replaced by the solution at this rank's own
+    /// rows and at the rows a linearization reads (the columns of Ã's Γ_C rows, the same on
+    /// every rank), the other rows left as they were; collective. So between the Newton
+    /// iterations of a step a rank's x is the iterate where the iterations read it, and
+    /// [`RankKrylov::gather_whole`] makes it whole once the step is solved: a gather of the
+    /// Γ_C rows' neighbourhood per Newton iteration, of N values per step.
     pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
         let owned_rhs: Vec<f64> = self.rows.owned.iter().map(|&row| rhs[row]).collect();
         let mut owned_x: Vec<f64> = self.rows.owned.iter().map(|&row| x[row]).collect();
@@ -305,14 +326,23 @@ impl RankKrylov {
         let solved = self.matrix.solve_from(&self.params, &owned_rhs, &mut owned_x, block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = solved?;
-        let whole = self.matrix.all_gather()?;
-        x.iter_mut()
-            .zip(&self.rows.global_of_row)
-            .for_each(|(x, &g)| *x = whole[g]);
+        (self.rows.owned.iter().zip(&owned_x)).for_each(|(&row, &value)| x[row] = value);
+        let (rows, values) = &mut self.read;
+        self.matrix.gather_selected(values)?;
+        rows.iter().zip(values.iter()).for_each(|(&row, &value)| x[row] = value);
         Ok(SolveInfo {
             iterations: info.iterations,
             residual: info.residual,
         })
+    }
+
+    /// The last solution, whole, into x (the system's order) on every rank; collective.
+    pub(crate) fn gather_whole(&mut self, x: &mut [f64]) -> Result<(), LaError> {
+        let whole = self.matrix.all_gather()?;
+        x.iter_mut()
+            .zip(&self.rows.global_of_row)
+            .for_each(|(x, &g)| *x = whole[g]);
+        Ok(())
     }
 
     /// Solves Ã x = b̃ from x as [`RankKrylov::solve`], with `params` for this solve only (the
