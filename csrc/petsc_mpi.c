@@ -417,20 +417,29 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned,
   PetscFunctionReturn(0);
 }
 
-/* The whole solution on every rank (n_global values into `all`), by PETSc's scatter to all,
- * made once and kept; collective. */
-int tc_dist_all_gather(tc_dist *dist, double *all)
+/* The solution through `scatter` into this rank's vector `to`, and its values into `out`;
+ * collective. */
+static PetscErrorCode tc_dist_scatter_copy(tc_dist *dist, VecScatter scatter, Vec to, double *out)
 {
   const PetscScalar *x;
   PetscInt           n;
   PetscFunctionBeginUser;
+  PetscCall(VecScatterBegin(scatter, dist->x, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(scatter, dist->x, to, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(to, &n));
+  PetscCall(VecGetArrayRead(to, &x));
+  memcpy(out, x, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(to, &x));
+  PetscFunctionReturn(0);
+}
+
+/* The whole solution on every rank (n_global values into `all`), by PETSc's scatter to all,
+ * made once and kept; collective. */
+int tc_dist_all_gather(tc_dist *dist, double *all)
+{
+  PetscFunctionBeginUser;
   if (!dist->to_all) PetscCall(VecScatterCreateToAll(dist->x, &dist->to_all, &dist->whole));
-  PetscCall(VecScatterBegin(dist->to_all, dist->x, dist->whole, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(dist->to_all, dist->x, dist->whole, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecGetLocalSize(dist->whole, &n));
-  PetscCall(VecGetArrayRead(dist->whole, &x));
-  memcpy(all, x, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayRead(dist->whole, &x));
+  PetscCall(tc_dist_scatter_copy(dist, dist->to_all, dist->whole, all));
   PetscFunctionReturn(0);
 }
 
@@ -462,16 +471,9 @@ int tc_dist_select(tc_dist *dist, int n, const int *indices)
  * selected; collective. */
 int tc_dist_gather_selected(tc_dist *dist, double *out)
 {
-  const PetscScalar *x;
-  PetscInt           n;
   PetscFunctionBeginUser;
   PetscCheck(dist->to_selected, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no entries selected (tc_dist_select)");
-  PetscCall(VecScatterBegin(dist->to_selected, dist->x, dist->selected, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(dist->to_selected, dist->x, dist->selected, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecGetLocalSize(dist->selected, &n));
-  PetscCall(VecGetArrayRead(dist->selected, &x));
-  memcpy(out, x, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayRead(dist->selected, &x));
+  PetscCall(tc_dist_scatter_copy(dist, dist->to_selected, dist->selected, out));
   PetscFunctionReturn(0);
 }
 
