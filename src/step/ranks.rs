@@ -64,6 +64,9 @@ pub(crate) struct RankKrylov {
     /// the columns of Ã's rows from `first_changing` on, gathered after each solve
     /// ([`RankKrylov::solve`]), and a buffer of their values.
     read: (Vec<usize>, Vec<f64>),
+    /// This rank's entries of b̃ and of x for PETSc, refilled by each solve (boxed, as
+    /// `changing`: the solver is a variant of the step's linear system).
+    owned: Box<(Vec<f64>, Vec<f64>)>,
 }
 
 /// A rank's rows of Ã that a linearization changes (its last, in the system's order): their
@@ -281,6 +284,7 @@ impl RankKrylov {
             first_changing,
             changing,
             read,
+            owned: Box::default(),
         };
         Ok((solver, a))
     }
@@ -320,13 +324,16 @@ impl RankKrylov {
     /// [`RankKrylov::gather_whole`] makes it whole once the step is solved: a gather of the
     /// Γ_C rows' neighbourhood per Newton iteration, of N values per step.
     pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
-        let owned_rhs: Vec<f64> = self.rows.owned.iter().map(|&row| rhs[row]).collect();
-        let mut owned_x: Vec<f64> = self.rows.owned.iter().map(|&row| x[row]).collect();
+        let (owned_rhs, owned_x) = &mut *self.owned;
+        owned_rhs.clear();
+        owned_rhs.extend(self.rows.owned.iter().map(|&row| rhs[row]));
+        owned_x.clear();
+        owned_x.extend(self.rows.owned.iter().map(|&row| x[row]));
         let block = self.block.as_ref().map(|b| &b.ilu as &dyn Preconditioner);
-        let solved = self.matrix.solve_from(&self.params, &owned_rhs, &mut owned_x, block);
+        let solved = self.matrix.solve_from(&self.params, owned_rhs, owned_x, block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = solved?;
-        (self.rows.owned.iter().zip(&owned_x)).for_each(|(&row, &value)| x[row] = value);
+        (self.rows.owned.iter().zip(owned_x.iter())).for_each(|(&row, &value)| x[row] = value);
         let (rows, values) = &mut self.read;
         self.matrix.gather_selected(values)?;
         rows.iter().zip(values.iter()).for_each(|(&row, &value)| x[row] = value);
