@@ -357,7 +357,7 @@ impl KrylovSystem {
     pub(super) fn whole(&self, solver: &mut KrylovSolver, x: &mut [f64]) -> Result<(), LaError> {
         match solver {
             KrylovSolver::Process(_) => {
-                let _ = x;
+                let _ = x; // whole already (read only by the ranks' arm)
                 Ok(())
             }
             #[cfg(feature = "mpi")]

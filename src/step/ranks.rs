@@ -27,12 +27,11 @@
 //! **Why replicate the iterates rather than distribute the Newton method too.** The nodal law
 //! and the stop tests read Γ_C's unknowns and their neighbours', O(|Γ_C|) per Newton iteration,
 //! against the Krylov solve's O(N) per Krylov iteration times 5–30 iterations: replicated, they
-//! cost little, and the ranks cannot
-//! disagree on a branch (a rank that stops its loop while another iterates would hang in the
-//! next collective call). What replication costs is memory (what every rank holds whole: 525
-//! bytes per unknown, 0.49 of a rank's 1.55 GiB at 972k unknowns on 2 ranks) and a gather of N
-//! values per step; docs/distributed.md gives the figures and what ends them (the law on owned
-//! Γ_C nodes, ghost updates and reductions for the tests).
+//! cost little, and the ranks cannot disagree on a branch (a rank that stops its loop while
+//! another iterates would hang in the next collective call). What replication costs is memory
+//! (what every rank holds whole: 525 bytes per unknown, 0.49 of a rank's 1.55 GiB at 972k
+//! unknowns on 2 ranks) and a gather of N values per step; docs/distributed.md gives the figures
+//! and what ends them (the law on owned Γ_C nodes, ghost updates and reductions for the tests).
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
@@ -60,13 +59,21 @@ pub(crate) struct RankKrylov {
     first_changing: usize,
     /// This rank's rows that a linearization changes, as PETSc's matrix gets them.
     changing: Box<ChangingRows>,
+    /// What each solve hands to PETSc and brings back ([`RankKrylov::solve`]).
+    exchange: Box<SolveExchange>,
+}
+
+/// The vectors of [`RankKrylov::solve`], kept for the run (boxed, as `changing`: the solver
+/// is a variant of the step's linear system).
+struct SolveExchange {
+    /// This rank's entries of b̃ and of x for PETSc.
+    owned_rhs: Vec<f64>,
+    owned_x: Vec<f64>,
     /// The rows of x (the system's order) that a linearization reads besides this rank's own:
-    /// the columns of Ã's rows from `first_changing` on, gathered after each solve
-    /// ([`RankKrylov::solve`]), and a buffer of their values.
-    read: (Vec<usize>, Vec<f64>),
-    /// This rank's entries of b̃ and of x for PETSc, refilled by each solve (boxed, as
-    /// `changing`: the solver is a variant of the step's linear system).
-    owned: Box<(Vec<f64>, Vec<f64>)>,
+    /// the columns of Ã's rows from `first_changing` on, gathered after each solve; and their
+    /// values.
+    read: Vec<usize>,
+    read_values: Vec<f64>,
 }
 
 /// A rank's rows of Ã that a linearization changes (its last, in the system's order): their
@@ -273,8 +280,12 @@ impl RankKrylov {
         read.sort_unstable();
         read.dedup();
         matrix.select(&read.iter().map(|&row| rows.global_of_row[row]).collect::<Vec<_>>())?;
-        let values = vec![0.0; read.len()];
-        let read = (read, values);
+        let exchange = Box::new(SolveExchange {
+            owned_rhs: Vec::with_capacity(rows.owned.len()),
+            owned_x: Vec::with_capacity(rows.owned.len()),
+            read_values: vec![0.0; read.len()],
+            read,
+        });
         let solver = RankKrylov {
             matrix,
             rows,
@@ -283,8 +294,7 @@ impl RankKrylov {
             block,
             first_changing,
             changing,
-            read,
-            owned: Box::default(),
+            exchange,
         };
         Ok((solver, a))
     }
@@ -324,7 +334,12 @@ impl RankKrylov {
     /// [`RankKrylov::gather_whole`] makes it whole once the step is solved: a gather of the
     /// Γ_C rows' neighbourhood per Newton iteration, of N values per step.
     pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
-        let (owned_rhs, owned_x) = &mut *self.owned;
+        let SolveExchange {
+            owned_rhs,
+            owned_x,
+            read,
+            read_values,
+        } = &mut *self.exchange;
         owned_rhs.clear();
         owned_rhs.extend(self.rows.owned.iter().map(|&row| rhs[row]));
         owned_x.clear();
@@ -333,10 +348,10 @@ impl RankKrylov {
         let solved = self.matrix.solve_from(&self.params, owned_rhs, owned_x, block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = solved?;
-        (self.rows.owned.iter().zip(owned_x.iter())).for_each(|(&row, &value)| x[row] = value);
-        let (rows, values) = &mut self.read;
-        self.matrix.gather_selected(values)?;
-        rows.iter().zip(values.iter()).for_each(|(&row, &value)| x[row] = value);
+        self.matrix.gather_selected(read_values)?;
+        let own = self.rows.owned.iter().zip(owned_x.iter());
+        own.chain(read.iter().zip(read_values.iter()))
+            .for_each(|(&row, &value)| x[row] = value);
         Ok(SolveInfo {
             iterations: info.iterations,
             residual: info.residual,
