@@ -29,7 +29,7 @@ mod sparse;
 pub mod vector;
 
 pub use error::{FactorStage, LaError};
-pub use gmres::{gmres, gmres_from_residual, GmresParams, Preconditioner, SolveInfo};
+pub use gmres::{gmres, Gmres, GmresParams, Preconditioner, SolveInfo};
 pub use graph::{level_bisection, NodeCells, NodeGraph, Part};
 pub use ilu::Ilu0;
 pub use ldlt::QuasiDefiniteLdlt;

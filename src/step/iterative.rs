@@ -26,9 +26,7 @@ use std::time::Instant;
 use super::amg::VelocityAmg;
 use super::direct::{contact_tangential_unknowns, SystemStats};
 use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, StepFailure};
-use crate::la::{
-    gmres_from_residual, level_bisection, CsrMatrix, FactorStage, Ilu0, LaError, NodeGraph, Part, SolveInfo,
-};
+use crate::la::{gmres, level_bisection, CsrMatrix, FactorStage, Gmres, Ilu0, LaError, NodeGraph, Part, SolveInfo};
 use crate::model::{ordered_rows, Problem, State, StepRhs};
 
 /// The rows of one contact node in the iterative path's ordering.
@@ -64,7 +62,6 @@ pub struct KrylovSystem {
     /// The AMG coarse correction of the velocities, where the preconditioner has one (`amg`, or
     /// `auto` resolved to it).
     amg: Option<VelocityAmg>,
-    pub(super) params: KrylovParams,
     stats: Mutex<SystemStats>,
 }
 
@@ -72,8 +69,9 @@ pub struct KrylovSystem {
 /// correction of the velocities where the system has one), or PETSc over the MPI ranks of a
 /// distributed run ([`KrylovParams::distributed`], [`super::ranks`]).
 pub(super) enum KrylovSolver {
-    /// This process's GMRES with the ILU(0) of Ã.
-    Process(Ilu0),
+    /// This process's GMRES (its vectors kept from solve to solve; boxed, as the solver is a
+    /// variant of the step's linear system) with the ILU(0) of Ã.
+    Process { ilu: Ilu0, gmres: Box<Gmres> },
     /// PETSc's GMRES over the ranks.
     #[cfg(feature = "mpi")]
     Ranks(super::ranks::RankKrylov),
@@ -84,16 +82,26 @@ impl KrylovSolver {
     /// changed (the ILU(0) refactored from there; the ranks' rows handed to PETSc again).
     pub(super) fn update(&mut self, a: &CsrMatrix, first_changed: usize) -> Result<(), LaError> {
         match self {
-            KrylovSolver::Process(ilu) => ilu.refactor_from(a, first_changed),
+            KrylovSolver::Process { ilu, .. } => ilu.refactor_from(a, first_changed),
             #[cfg(feature = "mpi")]
             KrylovSolver::Ranks(ranks) => ranks.set_matrix(a, first_changed),
+        }
+    }
+
+    /// Gives back the memory of the Krylov method's vectors, kept over the solves of a step
+    /// ([`Gmres`]); PETSc keeps its own.
+    pub(super) fn release_work(&mut self) {
+        match self {
+            KrylovSolver::Process { gmres, .. } => gmres.release(),
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(_) => {}
         }
     }
 
     /// Stored entries of Ã and of its factor (this process's ILU(0), or this rank's rows).
     fn nnz(&self) -> usize {
         match self {
-            KrylovSolver::Process(ilu) => ilu.nnz(),
+            KrylovSolver::Process { ilu, .. } => ilu.nnz(),
             #[cfg(feature = "mpi")]
             KrylovSolver::Ranks(ranks) => ranks.nnz(),
         }
@@ -152,7 +160,7 @@ fn ilu_needs_amg(
         max_iterations: PreconditionerKind::AUTO_AMG_ABOVE,
         ..KrylovParams::default()
     };
-    match gmres_from_residual(a, ilu, &b, &mut x, &mut Vec::new(), &probe.gmres()) {
+    match gmres(a, ilu, &b, &mut x, &probe.gmres()) {
         Ok(_) => Ok(false),
         Err(LaError::KrylovNotConverged { .. }) => Ok(true),
         Err(other) => Err(other.into()),
@@ -259,7 +267,8 @@ impl KrylovSystem {
             } else {
                 None
             };
-            (a, rhs, KrylovSolver::Process(ilu), amg)
+            let gmres = Box::new(Gmres::new(params.gmres()));
+            (a, rhs, KrylovSolver::Process { ilu, gmres }, amg)
         };
         let base = a.values_from(first_contact).to_vec();
         let nodes = (problem.contact.iter())
@@ -289,7 +298,6 @@ impl KrylovSystem {
             base,
             work: Mutex::new((a, solver)),
             amg,
-            params,
             stats: Mutex::new(SystemStats::default()),
         })
     }
@@ -329,7 +337,7 @@ impl KrylovSystem {
     }
 
     /// Solves Ã x = b̃ by GMRES from x with this system's preconditioner (see
-    /// [`gmres_from_residual`] for `residual`).
+    /// [`Gmres::solve`] for `residual`).
     pub(super) fn gmres(
         &self,
         (a, solver): (&CsrMatrix, &mut KrylovSolver),
@@ -338,10 +346,8 @@ impl KrylovSystem {
         residual: &mut Vec<f64>,
     ) -> Result<SolveInfo, LaError> {
         match (solver, &self.amg) {
-            (KrylovSolver::Process(ilu), None) => gmres_from_residual(a, &*ilu, rhs, x, residual, &self.params.gmres()),
-            (KrylovSolver::Process(ilu), Some(amg)) => {
-                gmres_from_residual(a, &amg.with(a, ilu), rhs, x, residual, &self.params.gmres())
-            }
+            (KrylovSolver::Process { ilu, gmres }, None) => gmres.solve(a, &*ilu, rhs, x, residual),
+            (KrylovSolver::Process { ilu, gmres }, Some(amg)) => gmres.solve(a, &amg.with(a, ilu), rhs, x, residual),
             // PETSc keeps its own residual: the caller's is left empty (not carried over).
             #[cfg(feature = "mpi")]
             (KrylovSolver::Ranks(ranks), _) => {
@@ -356,7 +362,7 @@ impl KrylovSystem {
     /// and this gathers the rest (collective); in one process x is whole already.
     pub(super) fn whole(&self, solver: &mut KrylovSolver, x: &mut [f64]) -> Result<(), LaError> {
         match solver {
-            KrylovSolver::Process(_) => {
+            KrylovSolver::Process { .. } => {
                 let _ = x; // whole already (read only by the ranks' arm)
                 Ok(())
             }

@@ -420,10 +420,38 @@ impl<'a> NewtonKrylov<'a> {
     pub fn step(&self, previous: &State, laws: &ContactLaws) -> Result<(State, StepInfo), SolveError> {
         let problem = self.problem;
         let sys = &self.system;
-        let td = problem.dim() - 1;
         let n = sys.order.len();
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
+        let mut info = StepInfo::default();
+        let mut guard = sys.lock();
+        let (a, solver) = &mut *guard;
+        let solved = self.converge(previous, laws, &b, x, (a, solver), &mut info);
+        // The Krylov solver's vectors serve the step's solves; given back after them, they are
+        // not held while the step's output is written.
+        solver.release_work();
+        let iterate = solved?;
+        drop(guard);
+        let mut x_unknowns = vec![0.0; n];
+        sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);
+        let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, iterate.xi);
+        Ok((state, info))
+    }
+
+    /// The step's unknowns, from x (the previous step's, in the system's order) to x whole (in a
+    /// distributed run too): the convexification loop, and where it fails Newton on the
+    /// nonmonotone law from the step's start.
+    fn converge(
+        &self,
+        previous: &State,
+        laws: &ContactLaws,
+        b: &[f64],
+        x: Vec<f64>,
+        (a, solver): (&mut CsrMatrix, &mut KrylovSolver),
+        info: &mut StepInfo,
+    ) -> Result<AllUnknowns, SolveError> {
+        let (problem, sys) = (self.problem, &self.system);
+        let (td, n) = (problem.dim() - 1, sys.order.len());
         // The step's start (all unknowns from the previous step), again for the way out.
         let start = |x: Vec<f64>| {
             let mut w = self.tangential(&x);
@@ -434,16 +462,13 @@ impl<'a> NewtonKrylov<'a> {
                 xi: previous.xi.clone(),
             }
         };
-        let mut info = StepInfo::default();
-        let mut guard = sys.lock();
-        let (a, solver) = &mut *guard;
         let mut newton = SemismoothNewton {
             solver: self,
             linearization: Linearization {
                 system: sys,
                 a,
                 solver,
-                b: &b,
+                b,
                 laws,
                 td,
                 rhs: vec![0.0; n],
@@ -461,23 +486,20 @@ impl<'a> NewtonKrylov<'a> {
                 ceiling: INNER_CEILING,
             },
         };
-        let mut iterate = match convexify(&mut newton, start(x), &params, &mut info) {
+        let mut iterate = match convexify(&mut newton, start(x), &params, info) {
             Ok(iterate) => iterate,
             Err(SolveError::NotConverged(failure)) => {
+                let t = laws.t;
                 let (_, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
-                match newton.nonmonotone_newton(start(x), &mut info)? {
+                match newton.nonmonotone_newton(start(x), info)? {
                     Some(iterate) => iterate,
                     None => return Err(SolveError::NotConverged(failure)),
                 }
             }
             Err(other) => return Err(other),
         };
-        sys.whole(solver, &mut iterate.x)?;
-        drop(guard);
-        let mut x_unknowns = vec![0.0; n];
-        sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);
-        let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, iterate.xi);
-        Ok((state, info))
+        sys.whole(newton.linearization.solver, &mut iterate.x)?;
+        Ok(iterate)
     }
 
     fn tangential(&self, x: &[f64]) -> Vec<f64> {

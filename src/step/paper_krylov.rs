@@ -83,14 +83,17 @@ impl<'a> PaperKrylov<'a> {
             krylov_iterations: 0,
         };
         let k = sys.time_step();
-        let (state, mut info) = paper_step(
+        let stepped = paper_step(
             (problem, &self.grams),
             &self.params,
             self.augmentation,
             "paper",
             (previous, k, laws),
             &mut loaded,
-        )?;
+        );
+        // As on the Newton–Krylov path: the solver's vectors are not held between steps.
+        loaded.solver.release_work();
+        let (state, mut info) = stepped?;
         info.krylov_iterations = loaded.krylov_iterations;
         Ok((state, info))
     }
