@@ -186,7 +186,8 @@ fn the_cutback_depth_is_bounded_with_a_clear_error() {
 /// A Krylov solve at its cap on the iterative path stops the run (no cutback here) with a
 /// failure record that names the linear solve and carries its residual history: the relative
 /// residual before its one iteration and after it, as GMRES estimates it, the last one the
-/// reported (true) residual to rounding.
+/// reported (true) residual to rounding. The summary's Krylov iterations count the solves that
+/// failed too.
 #[test]
 fn a_capped_krylov_solve_is_reported_with_its_residual_history() {
     let out = scratch("krylov");
@@ -196,6 +197,10 @@ fn a_capped_krylov_solve_is_reported_with_its_residual_history() {
     assert!(stderr.contains("relative residual of the linear solve"), "{stderr}");
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "failed");
+    // The solves that reached their cap did their iterations: one each, counted in the run's
+    // work (no step completed to count them).
+    assert!(summary["linear_solves"].as_u64().unwrap() >= 1, "{summary}");
+    assert_eq!(summary["krylov_iterations"], summary["linear_solves"], "{summary}");
     let solver = &summary["failure"]["solver"];
     assert_eq!(solver["loop_name"], "GMRES");
     assert_eq!(solver["iterations"], 1);

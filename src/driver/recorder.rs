@@ -59,6 +59,7 @@ pub(super) struct Recorder<'a, 'p> {
     /// tally adds this process's to it wherever it is saved.
     solves_before: usize,
     sweeps_before: usize,
+    krylov_before: usize,
     timings: Timings,
     /// Each rank's peak memory, MiB, once the ranks of a distributed run have shared them at
     /// its end ([`Recorder::ranks_peak_memory`]).
@@ -90,6 +91,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             watch: Watch::new(problem),
             solves_before: tally.solves,
             sweeps_before: tally.sweeps,
+            krylov_before: tally.krylov_iterations,
             tally,
             timings,
             ranks_peak_memory: None,
@@ -194,6 +196,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         let stats = self.levels.step_stats();
         self.tally.solves = self.solves_before + stats.solves;
         self.tally.sweeps = self.sweeps_before + stats.sweeps;
+        self.tally.krylov_iterations = self.krylov_before + stats.krylov_iterations;
     }
 
     /// Each rank's peak memory (MiB, in rank order): the summary's is then the largest.

@@ -140,7 +140,9 @@ pub struct Summary {
     /// The AMG hierarchy, where the preconditioner has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub amg: Option<AmgRecord>,
-    /// Krylov iterations over all linear solves (iterative path; 0 on the direct path).
+    /// Krylov iterations over all linear solves in the time loop (iterative path; 0 on the
+    /// direct path), as `linear_solves`: those of a step's attempts that were given up and cut
+    /// back included, so more than the sum of `steps.csv`'s column where a step was cut back.
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange over all steps (0 where ∂j is
     /// affine: in the step matrix).
@@ -600,7 +602,6 @@ impl Tally {
         self.nonmonotone_newton_steps += usize::from(info.nonmonotone_newton_iterations > 0);
         self.nonmonotone_newton_iterations += info.nonmonotone_newton_iterations;
         self.anderson_combinations += info.anderson_combinations;
-        self.krylov_iterations += info.krylov_iterations;
         self.exchange_iterations += info.exchange_iterations;
         self.pressure_iterations += info.pressure_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);

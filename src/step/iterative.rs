@@ -440,7 +440,12 @@ pub(super) fn krylov_solve(
     let solved = sys.gmres((a, solver), rhs, x, residual);
     sys.count(|s| {
         s.solves += 1;
-        s.krylov_iterations += solved.as_ref().map_or(0, |i| i.iterations);
+        // A solve at its cap did its iterations too.
+        s.krylov_iterations += match &solved {
+            Ok(info) => info.iterations,
+            Err(LaError::KrylovNotConverged { iterations, .. }) => *iterations,
+            Err(_) => 0,
+        };
         s.solve_seconds += clock.elapsed().as_secs_f64();
     });
     match solved {
