@@ -17,8 +17,13 @@
 //! of the mesh and the cross-section between them ([`crate::la::level_bisection`]), so that the ILU(0)
 //! sweeps run the halves on the two cores. GMRES starts from the previous
 //! iterate (from the previous step's state at the first), so the later iterations of a step
-//! need few Krylov iterations. Why GMRES + ILU(0) and when it stays bounded:
-//! docs/krylov-study.md.
+//! need few Krylov iterations, and keeps its vectors over the step's solves ([`Gmres`]: fresh
+//! ones were the kernel zeroing pages, 10–20 % of a step at 972k unknowns). Why GMRES +
+//! ILU(0) and when it stays bounded: docs/krylov-study.md. Tried and dropped (2026-11-27):
+//! starting each solve from the least-squares combination of the last corrections (Fischer's
+//! projection), 10 % fewer Krylov iterations at k = 1/64, but fields that move by the Krylov
+//! tolerance and a hard step (47k, k = 1/8) that Newton on the law then no longer finishes
+//! (docs/performance.md).
 
 use std::sync::Mutex;
 use std::time::Instant;
