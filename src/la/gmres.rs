@@ -66,8 +66,8 @@ pub trait Preconditioner {
     fn method(&self) -> &'static str;
 }
 
-/// Restarted GMRES(m), right-preconditioned (so its residual estimate is the true residual's),
-/// modified Gram–Schmidt, Givens rotations. `x` holds the initial guess.
+/// Restarted GMRES(m), right-preconditioned (so its residual estimate is the unpreconditioned
+/// residual's), modified Gram–Schmidt, Givens rotations. `x` holds the initial guess.
 ///
 /// Fails with [`Error::KrylovNotConverged`] (with the residual history) at the iteration cap.
 /// A caller that solves again and again keeps a [`Gmres`] instead (its vectors are kept).

@@ -68,7 +68,8 @@ pub enum StepError {
 /// Tolerance and caps of a Krylov solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KrylovParams {
-    /// Stop when ‖b − A x‖ ≤ rtol ‖b‖ (the true, unpreconditioned residual).
+    /// Stop when ‖b − A x‖ ≤ rtol ‖b‖ (the unpreconditioned residual; in one process carried
+    /// through each GMRES cycle by the Arnoldi relation, equal to b − A x to rounding).
     pub rtol: f64,
     /// Iteration cap (products with A).
     pub max_iterations: usize,
