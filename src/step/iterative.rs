@@ -94,8 +94,8 @@ impl KrylovSolver {
     }
 
     /// Gives back the memory of the Krylov method's vectors, kept over the solves of a step
-    /// ([`Gmres`]); PETSc keeps its own.
-    pub(super) fn release_work(&mut self) {
+    /// ([`Gmres`]; at the end of each, [`StepWork`]); PETSc keeps its own.
+    fn release_work(&mut self) {
         match self {
             KrylovSolver::Process { gmres, .. } => gmres.release(),
             #[cfg(feature = "mpi")]
@@ -426,8 +426,38 @@ impl KrylovSystem {
         self.work.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Ã and its Krylov solver for the solves of one step: when the step lets them go, however
+    /// it ends, the solver gives its vectors back ([`KrylovSolver::release_work`]), so that they
+    /// are not held while the step's output is written.
+    pub(super) fn lock_for_step(&self) -> StepWork<'_> {
+        StepWork(self.lock())
+    }
+
     pub(super) fn count(&self, update: impl FnOnce(&mut SystemStats)) {
         update(&mut self.stats.lock().unwrap_or_else(|e| e.into_inner()));
+    }
+}
+
+/// Ã and its Krylov solver held for one step ([`KrylovSystem::lock_for_step`]).
+pub(super) struct StepWork<'s>(std::sync::MutexGuard<'s, (CsrMatrix, KrylovSolver)>);
+
+impl std::ops::Deref for StepWork<'_> {
+    type Target = (CsrMatrix, KrylovSolver);
+
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for StepWork<'_> {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.0
+    }
+}
+
+impl Drop for StepWork<'_> {
+    fn drop(&mut self) {
+        self.0 .1.release_work();
     }
 }
 

@@ -424,13 +424,9 @@ impl<'a> NewtonKrylov<'a> {
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
         let mut info = StepInfo::default();
-        let mut guard = sys.lock();
+        let mut guard = sys.lock_for_step();
         let (a, solver) = &mut *guard;
-        let solved = self.converge(previous, laws, &b, x, (a, solver), &mut info);
-        // The Krylov solver's vectors serve the step's solves; given back after them, they are
-        // not held while the step's output is written.
-        solver.release_work();
-        let iterate = solved?;
+        let iterate = self.converge(previous, laws, &b, x, (a, solver), &mut info)?;
         drop(guard);
         let mut x_unknowns = vec![0.0; n];
         sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);

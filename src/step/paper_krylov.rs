@@ -65,7 +65,7 @@ impl<'a> PaperKrylov<'a> {
         let (problem, sys) = (self.problem, &self.system);
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
-        let mut guard = sys.lock();
+        let mut guard = sys.lock_for_step();
         let (a, solver) = &mut *guard;
         let mut loaded = KrylovStep {
             problem,
@@ -83,17 +83,14 @@ impl<'a> PaperKrylov<'a> {
             krylov_iterations: 0,
         };
         let k = sys.time_step();
-        let stepped = paper_step(
+        let (state, mut info) = paper_step(
             (problem, &self.grams),
             &self.params,
             self.augmentation,
             "paper",
             (previous, k, laws),
             &mut loaded,
-        );
-        // As on the Newton–Krylov path: the solver's vectors are not held between steps.
-        loaded.solver.release_work();
-        let (state, mut info) = stepped?;
+        )?;
         info.krylov_iterations = loaded.krylov_iterations;
         Ok((state, info))
     }
