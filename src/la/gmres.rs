@@ -90,7 +90,7 @@ pub fn gmres(
 /// kernel's page clearing was the largest single symbol in the profile of a run at 972k
 /// unknowns. Kept, a vector is allocated the first time a solve reaches its iteration and
 /// reused after; [`Gmres::release`] gives them back between bursts of solves (the step solvers
-/// of `crate::step` call it after each step, so that they are not held while its output is
+/// of `crate::step` give them back whenever a step ends, so that they are not held while its output is
 /// written). The 3D example at 972k unknowns on the iterative path, 4 steps (64 solves),
 /// 2026-11-27, three interleaved pairs: 1.87 M → 0.89 M page faults, time stepping 14.6–15.8 s
 /// → 12.7–13.2 s, the same bits, the same peak memory with frames off (+1 % with them).
