@@ -85,32 +85,49 @@ impl Ilu0 {
                 detail: format!("row {i} couples the domains 0..{first_end} and {first_end}..{second_end}"),
             });
         }
+        Self::from_row_parts(n, parts, |i| {
+            let (cols, vals) = a.row(i);
+            [(cols, vals), (&[], &[])]
+        })
+    }
+
+    /// The factor of the n × n matrix whose row i is `row(i)`, given in two parts (columns
+    /// ascending within each, every column of the first below every column of the second): a
+    /// row kept in two arrays, such as a rank's rows in PETSc's diagonal and off-diagonal parts
+    /// with the latter's columns numbered after the former's, is factored where it lies, without
+    /// a copy of the matrix. `parts`: the two domains of [`Ilu0::with_domains`], not checked here.
+    pub fn from_row_parts<'a>(
+        n: usize,
+        parts: [usize; 2],
+        row: impl Fn(usize) -> RowParts<'a> + Sync,
+    ) -> Result<Self, Error> {
         if u32::try_from(n).is_err() {
             return Err(Error::Factorization {
                 stage: FactorStage::IncompleteLu,
                 detail: format!("{n} unknowns exceed 32-bit indices"),
             });
         }
-        let mut diag = Vec::with_capacity(n);
+        let (mut n_lower, mut n_upper) = (0, 0);
         for i in 0..n {
-            match a.row(i).0.binary_search(&(i as u32)) {
-                Ok(p) => diag.push(a.ptr[i] + p),
-                Err(_) => {
-                    return Err(Error::Factorization {
-                        stage: FactorStage::IncompleteLu,
-                        detail: format!("row {i} has no diagonal entry"),
-                    })
-                }
+            let [(c0, _), (c1, _)] = row(i);
+            let below = c0.partition_point(|&c| (c as usize) < i) + c1.partition_point(|&c| (c as usize) < i);
+            let has_diagonal = c0.binary_search(&(i as u32)).is_ok() || c1.binary_search(&(i as u32)).is_ok();
+            if !has_diagonal {
+                return Err(Error::Factorization {
+                    stage: FactorStage::IncompleteLu,
+                    detail: format!("row {i} has no diagonal entry"),
+                });
             }
+            n_lower += below;
+            n_upper += c0.len() + c1.len() - below - 1;
         }
-        let n_lower: usize = (0..n).map(|i| diag[i] - a.ptr[i]).sum();
         let mut f = Ilu0 {
             l_ptr: Vec::with_capacity(n + 1),
             l_col: Vec::with_capacity(n_lower),
             l_val: vec![0.0f32; n_lower],
             u_ptr: Vec::with_capacity(n + 1),
-            u_col: Vec::with_capacity(a.nnz() - n_lower - n),
-            u_val: vec![0.0f32; a.nnz() - n_lower - n],
+            u_col: Vec::with_capacity(n_upper),
+            u_val: vec![0.0f32; n_upper],
             inv_diag: vec![0.0; n],
             parts,
             scratch: RowScratch::new(n),
@@ -118,12 +135,15 @@ impl Ilu0 {
         f.l_ptr.push(0);
         f.u_ptr.push(0);
         for i in 0..n {
-            f.l_col.extend_from_slice(&a.col[a.ptr[i]..diag[i]]);
+            let i32 = i as u32;
+            for (cols, _) in row(i) {
+                f.l_col.extend(cols.iter().filter(|&&c| c < i32));
+                f.u_col.extend(cols.iter().filter(|&&c| c > i32));
+            }
             f.l_ptr.push(f.l_col.len());
-            f.u_col.extend_from_slice(&a.col[diag[i] + 1..a.ptr[i + 1]]);
             f.u_ptr.push(f.u_col.len());
         }
-        f.refactor_from(a, 0)?;
+        f.refactor_parts_from(0, row)?;
         Ok(f)
     }
 
@@ -142,6 +162,18 @@ impl Ilu0 {
         &mut self,
         first: usize,
         row: impl Fn(usize) -> (&'a [u32], &'a [f64]) + Sync,
+    ) -> Result<(), Error> {
+        self.refactor_parts_from(first, |i| {
+            let (cols, vals) = row(i);
+            [(cols, vals), (&[], &[])]
+        })
+    }
+
+    /// [`Ilu0::refactor_rows_from`] with each row in two parts, as [`Ilu0::from_row_parts`].
+    pub fn refactor_parts_from<'a>(
+        &mut self,
+        first: usize,
+        row: impl Fn(usize) -> RowParts<'a> + Sync,
     ) -> Result<(), Error> {
         let n = self.inv_diag.len();
         let [first_end, second_end] = self.parts;
@@ -258,6 +290,10 @@ struct Pattern<'a> {
     u_col: &'a [u32],
 }
 
+/// A row of a matrix in two parts ([`Ilu0::from_row_parts`]): columns and values of each, the
+/// second part's columns after the first's (either may be empty).
+pub type RowParts<'a> = [(&'a [u32], &'a [f64]); 2];
+
 /// The values (L, U, inverted diagonal) of the factor's rows from some row on.
 type RowValues<'v> = (&'v mut [f32], &'v mut [f32], &'v mut [f64]);
 
@@ -282,7 +318,7 @@ impl Pattern<'_> {
     /// `base` on, and every row that `rows` refer to lies there.
     fn factor_rows<'a>(
         &self,
-        row: &impl Fn(usize) -> (&'a [u32], &'a [f64]),
+        row: &impl Fn(usize) -> RowParts<'a>,
         rows: std::ops::Range<usize>,
         base: usize,
         (l_val, u_val, inv_diag): RowValues,
@@ -291,12 +327,15 @@ impl Pattern<'_> {
         let (l0, u0) = (self.l_ptr[base], self.u_ptr[base]);
         let RowScratch { dense, in_row } = scratch;
         for i in rows {
-            let (cols, vals) = row(i);
-            for (&c, &v) in cols.iter().zip(vals) {
-                dense[c as usize] = v;
-                in_row[c as usize] = true;
+            let parts = row(i);
+            for (cols, vals) in parts {
+                for (&c, &v) in cols.iter().zip(vals) {
+                    dense[c as usize] = v;
+                    in_row[c as usize] = true;
+                }
             }
-            for k in cols.iter().map(|&k| k as usize).take_while(|&k| k < i) {
+            let lower = parts.iter().flat_map(|(cols, _)| cols.iter());
+            for k in lower.map(|&k| k as usize).take_while(|&k| k < i) {
                 let l = dense[k] * inv_diag[k - base];
                 dense[k] = l;
                 let range = self.u_ptr[k]..self.u_ptr[k + 1];
@@ -310,7 +349,7 @@ impl Pattern<'_> {
             let pivot = dense[i];
             if pivot == 0.0 || !pivot.is_finite() {
                 // The scratch is kept for the next refactorization: leave it clean.
-                for &c in cols {
+                for &c in parts.iter().flat_map(|(cols, _)| cols.iter()) {
                     dense[c as usize] = 0.0;
                     in_row[c as usize] = false;
                 }
@@ -329,7 +368,7 @@ impl Pattern<'_> {
                 *slot = dense[c as usize] as f32;
             }
             inv_diag[i - base] = 1.0 / pivot;
-            for &c in cols {
+            for &c in parts.iter().flat_map(|(cols, _)| cols.iter()) {
                 dense[c as usize] = 0.0;
                 in_row[c as usize] = false;
             }
@@ -434,6 +473,46 @@ pub(crate) mod tests {
                 ..
             })
         ));
+    }
+
+    /// Each row given in two parts (split at a column per row, as a rank's rows in PETSc's two
+    /// parts) gives the factor of the whole rows, to the bit, and so does refactoring from a
+    /// row on in parts.
+    #[test]
+    fn rows_in_two_parts_give_the_factor_of_the_whole_rows() {
+        let mut a = two_domains();
+        let split_at = |i: usize| 3 + i % 5;
+        let parts = |a: &CsrMatrix| {
+            let a = a.clone();
+            move |i: usize| {
+                let (cols, vals) = a.row(i);
+                let s = cols.partition_point(|&c| (c as usize) < split_at(i));
+                [
+                    (cols[..s].to_vec(), vals[..s].to_vec()),
+                    (cols[s..].to_vec(), vals[s..].to_vec()),
+                ]
+            }
+        };
+        let rows: Vec<_> = (0..10).map(parts(&a)).collect();
+        fn of(rows: &[[(Vec<u32>, Vec<f64>); 2]], i: usize) -> RowParts<'_> {
+            let [(c0, v0), (c1, v1)] = &rows[i];
+            [(c0.as_slice(), v0.as_slice()), (c1.as_slice(), v1.as_slice())]
+        }
+        let mut in_parts = Ilu0::from_row_parts(10, [0, 0], |i| of(&rows, i)).unwrap();
+        let whole = Ilu0::new(&a).unwrap();
+        assert_eq!(in_parts.l_val, whole.l_val);
+        assert_eq!(in_parts.u_val, whole.u_val);
+        assert_eq!(in_parts.inv_diag, whole.inv_diag);
+        for row in 6..10 {
+            a.row_values_mut(row).iter_mut().for_each(|v| *v *= 1.25);
+        }
+        let rows: Vec<_> = (0..10).map(parts(&a)).collect();
+        in_parts.refactor_parts_from(6, |i| of(&rows, i)).unwrap();
+        let fresh = Ilu0::new(&a).unwrap();
+        assert_eq!(in_parts.l_val, fresh.l_val);
+        assert_eq!(in_parts.u_val, fresh.u_val);
+        assert_eq!(in_parts.inv_diag, fresh.inv_diag);
+        assert_ne!(fresh.inv_diag, whole.inv_diag);
     }
 
     /// Refactoring the rows from `first` on after they change gives the factor of the changed

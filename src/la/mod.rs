@@ -31,6 +31,6 @@ pub mod vector;
 pub use error::{FactorStage, LaError};
 pub use gmres::{gmres, Gmres, GmresParams, Preconditioner, SolveInfo};
 pub use graph::{level_bisection, NodeCells, NodeGraph, Part};
-pub use ilu::Ilu0;
+pub use ilu::{Ilu0, RowParts};
 pub use ldlt::QuasiDefiniteLdlt;
 pub use sparse::{row_index, ColumnsMut, CscMatrix, CsrMatrix};
