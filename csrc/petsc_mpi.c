@@ -152,6 +152,13 @@ struct tc_dist {
    * one tc_dist_solve_from: z = M_r^-1 r on the owned entries, 0 on success. */
   int (*block_apply)(void *ctx, const double *r, double *z, int n);
   void *block_ctx;
+  /* Restricted additive Schwarz (preconditioner 3, tc_dist_set_overlap): the scatter of the
+   * overlap's entries (rows of other ranks that this rank's rows read) from a vector of A's
+   * layout, their copy, and the overlapped block's input [owned, overlap] and output. */
+  VecScatter   to_overlap;
+  Vec          overlap;
+  PetscInt     n_overlap;
+  PetscScalar *overlap_in, *overlap_out;
 };
 typedef struct tc_dist tc_dist;
 
@@ -162,6 +169,10 @@ void tc_dist_destroy(tc_dist *dist)
   VecDestroy(&dist->whole);
   VecScatterDestroy(&dist->to_selected);
   VecDestroy(&dist->selected);
+  VecScatterDestroy(&dist->to_overlap);
+  VecDestroy(&dist->overlap);
+  free(dist->overlap_in);
+  free(dist->overlap_out);
   KSPDestroy(&dist->ksp);
   MatDestroy(&dist->A);
   VecDestroy(&dist->b);
@@ -279,6 +290,135 @@ static PetscErrorCode tc_dist_block_apply(PC pc, Vec r, Vec z)
   PetscFunctionReturn(0);
 }
 
+/* PCApply of restricted additive Schwarz with the caller's preconditioner of each rank's
+ * overlapped block: r's owned entries and its overlap's (scattered from their ranks) in one
+ * local vector [owned, overlap], dist->block_apply on it, and of the result the owned entries
+ * only (restricted: no sum over the ranks that share an overlap). */
+static PetscErrorCode tc_dist_overlap_apply(PC pc, Vec r, Vec z)
+{
+  tc_dist           *dist;
+  const PetscScalar *rv, *gv;
+  PetscScalar       *zv;
+  PetscInt           n;
+  int                code;
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &dist));
+  PetscCheck(dist->block_apply, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no block preconditioner given for this solve");
+  PetscCheck(dist->to_overlap, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no overlap set (tc_dist_set_overlap)");
+  PetscCall(VecScatterBegin(dist->to_overlap, r, dist->overlap, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(dist->to_overlap, r, dist->overlap, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetLocalSize(r, &n));
+  PetscCall(VecGetArrayRead(r, &rv));
+  memcpy(dist->overlap_in, rv, (size_t)n * sizeof(PetscScalar));
+  PetscCall(VecRestoreArrayRead(r, &rv));
+  PetscCall(VecGetArrayRead(dist->overlap, &gv));
+  memcpy(dist->overlap_in + n, gv, (size_t)dist->n_overlap * sizeof(PetscScalar));
+  PetscCall(VecRestoreArrayRead(dist->overlap, &gv));
+  code = dist->block_apply(dist->block_ctx, dist->overlap_in, dist->overlap_out, (int)(n + dist->n_overlap));
+  PetscCheck(code == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "the overlapped block preconditioner of this rank failed (%d)",
+             code);
+  PetscCall(VecGetArrayWrite(z, &zv));
+  memcpy(zv, dist->overlap_out, (size_t)n * sizeof(PetscScalar));
+  PetscCall(VecRestoreArrayWrite(z, &zv));
+  PetscFunctionReturn(0);
+}
+
+/* The overlap of this rank's block for restricted additive Schwarz: the global rows `overlap`
+ * (n, ascending, none of this rank's) whose entries each application brings from their ranks;
+ * made once, replaces an earlier one; collective (the scatter's set-up). */
+static PetscErrorCode tc_dist_overlap_setup(tc_dist *dist, int n, const int *overlap)
+{
+  IS       is;
+  PetscInt n_owned;
+  PetscFunctionBeginUser;
+  PetscCall(VecScatterDestroy(&dist->to_overlap));
+  PetscCall(VecDestroy(&dist->overlap));
+  free(dist->overlap_in);
+  free(dist->overlap_out);
+  dist->overlap_in = dist->overlap_out = NULL;
+  PetscCall(VecGetLocalSize(dist->x, &n_owned));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n, overlap, PETSC_COPY_VALUES, &is));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &dist->overlap));
+  PetscCall(VecScatterCreate(dist->x, is, dist->overlap, NULL, &dist->to_overlap));
+  PetscCall(ISDestroy(&is));
+  dist->n_overlap   = n;
+  dist->overlap_in  = malloc(((size_t)n_owned + (size_t)n + 1) * sizeof(PetscScalar));
+  dist->overlap_out = malloc(((size_t)n_owned + (size_t)n + 1) * sizeof(PetscScalar));
+  PetscCheck(dist->overlap_in && dist->overlap_out, PETSC_COMM_SELF, PETSC_ERR_MEM, "the overlapped block's vectors");
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_set_overlap(tc_dist *dist, int n, const int *overlap)
+{
+  return (int)tc_dist_overlap_setup(dist, n, overlap);
+}
+
+/* The rows `rows` (n_rows global indices, ascending) of A restricted to the columns `cols`
+ * (n_cols global indices, ascending), any rank's, by MatCreateSubMatrices; collective. `*sub`
+ * receives them as a sequential matrix (columns numbered by their position in `cols`) and
+ * `*nnz` its entries, for tc_dist_take_rows. */
+static PetscErrorCode tc_dist_fetch_setup(tc_dist *dist, int n_rows, const int *rows, int n_cols, const int *cols,
+                                          Mat *sub, long long *nnz)
+{
+  IS              is[2];
+  Mat            *subs;
+  PetscInt        n;
+  const PetscInt *ia, *ja;
+  PetscBool       done;
+  PetscFunctionBeginUser;
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n_rows, rows, PETSC_COPY_VALUES, &is[0]));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n_cols, cols, PETSC_COPY_VALUES, &is[1]));
+  PetscCall(MatCreateSubMatrices(dist->A, 1, &is[0], &is[1], MAT_INITIAL_MATRIX, &subs));
+  PetscCall(ISDestroy(&is[0]));
+  PetscCall(ISDestroy(&is[1]));
+  *sub = subs[0];
+  PetscCall(PetscFree(subs));
+  PetscCall(MatGetRowIJ(*sub, 0, PETSC_FALSE, PETSC_FALSE, &n, &ia, &ja, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "the fetched rows' structure is not available");
+  *nnz = (long long)ia[n];
+  PetscCall(MatRestoreRowIJ(*sub, 0, PETSC_FALSE, PETSC_FALSE, &n, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_fetch_rows(tc_dist *dist, int n_rows, const int *rows, int n_cols, const int *cols, void **sub,
+                       long long *nnz)
+{
+  Mat m = NULL;
+  int ierr = (int)tc_dist_fetch_setup(dist, n_rows, rows, n_cols, cols, &m, nnz);
+  *sub = m;
+  return ierr;
+}
+
+/* The rows of tc_dist_fetch_rows as CSR (ptr: n_rows + 1 offsets, cols and values: nnz each),
+ * then the sequential matrix destroyed. */
+static PetscErrorCode tc_dist_take_setup(Mat sub, long long *ptr, int *cols, double *values)
+{
+  PetscInt           n;
+  const PetscInt    *ia, *ja;
+  const PetscScalar *a;
+  PetscBool          done;
+  PetscFunctionBeginUser;
+  PetscCall(MatGetRowIJ(sub, 0, PETSC_FALSE, PETSC_FALSE, &n, &ia, &ja, &done));
+  PetscCheck(done, PETSC_COMM_SELF, PETSC_ERR_SUP, "the fetched rows' structure is not available");
+  PetscCall(MatSeqAIJGetArrayRead(sub, &a));
+  for (PetscInt i = 0; i <= n; ++i) ptr[i] = ia[i];
+  for (PetscInt e = 0; e < ia[n]; ++e) {
+    cols[e]   = (int)ja[e];
+    values[e] = a[e];
+  }
+  PetscCall(MatSeqAIJRestoreArrayRead(sub, &a));
+  PetscCall(MatRestoreRowIJ(sub, 0, PETSC_FALSE, PETSC_FALSE, &n, &ia, &ja, &done));
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_take_rows(void *sub, long long *ptr, int *cols, double *values)
+{
+  Mat m    = sub;
+  int ierr = (int)tc_dist_take_setup(m, ptr, cols, values);
+  MatDestroy(&m);
+  return ierr;
+}
+
 /* The values of n_rows of this rank's rows (global rows[r], its entries ptr[r]..ptr[r + 1] of
  * cols and values), every entry in the pattern, the other rows unchanged; collective (the
  * assembly). For the few rows a linearization changes: MatSetValuesCOO sets every value. */
@@ -296,8 +436,9 @@ int tc_dist_set_rows(tc_dist *dist, int n_rows, const int *rows, const long long
 }
 
 /* The Krylov solver on the current values: GMRES(restart) with block Jacobi + ILU(0)
- * (preconditioner 0), GAMG (1) or block Jacobi with the caller's block preconditioner (2, a
- * PCSHELL, given to each tc_dist_solve_from), relative tolerance rtol, at most max_its
+ * (preconditioner 0), GAMG (1), block Jacobi with the caller's block preconditioner (2, a
+ * PCSHELL, given to each tc_dist_solve_from) or restricted additive Schwarz with the caller's
+ * preconditioner of the overlapped block (3, a PCSHELL: tc_dist_set_overlap first), relative tolerance rtol, at most max_its
  * iterations; options under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
 static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
 {
@@ -320,6 +461,11 @@ static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, do
     PetscCall(PCShellSetContext(pc, dist));
     PetscCall(PCShellSetApply(pc, tc_dist_block_apply));
     PetscCall(PCShellSetName(pc, "block Jacobi, each rank's block by thermocontact's ILU(0)"));
+  } else if (preconditioner == 3) {
+    PetscCall(PCSetType(pc, PCSHELL));
+    PetscCall(PCShellSetContext(pc, dist));
+    PetscCall(PCShellSetApply(pc, tc_dist_overlap_apply));
+    PetscCall(PCShellSetName(pc, "restricted additive Schwarz, overlap 1, each rank's block by thermocontact's ILU(0)"));
   } else {
     /* Block Jacobi, one block per rank, each ILU(0) (PETSc's default sub-solver). */
     PetscCall(PCSetType(pc, PCBJACOBI));

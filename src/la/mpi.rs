@@ -5,7 +5,10 @@
 //! MPIAIJ matrix whose pattern is given once, as COO pairs refilled by value or as each rank's
 //! rows that PETSc keeps in the rank's own arrays ([`DistributedMatrix::from_split`]), changed
 //! by rows, with its right-hand side and GMRES preconditioned by block Jacobi (PETSc's ILU(0)
-//! or the caller's preconditioner of each rank's block) or GAMG; a
+//! or the caller's preconditioner of each rank's block), restricted additive Schwarz (the
+//! caller's preconditioner of each rank's overlapped block: its rows and those of other ranks
+//! that they read, [`DistributedMatrix::set_overlap`], fetched by [`DistributedMatrix::fetch_rows`])
+//! or GAMG; a
 //! [`GhostedVector`] (PETSc's `VecGhost`): owned entries and the copies a rank reads of its
 //! neighbours', refreshed by PETSc.
 //!
@@ -122,6 +125,17 @@ extern "C" {
     fn tc_dist_all_gather(dist: *mut RawDist, all: *mut c_double) -> c_int;
     fn tc_dist_select(dist: *mut RawDist, n: c_int, indices: *const c_int) -> c_int;
     fn tc_dist_gather_selected(dist: *mut RawDist, out: *mut c_double) -> c_int;
+    fn tc_dist_set_overlap(dist: *mut RawDist, n: c_int, overlap: *const c_int) -> c_int;
+    fn tc_dist_fetch_rows(
+        dist: *mut RawDist,
+        n_rows: c_int,
+        rows: *const c_int,
+        n_cols: c_int,
+        cols: *const c_int,
+        sub: *mut *mut c_void,
+        nnz: *mut c_longlong,
+    ) -> c_int;
+    fn tc_dist_take_rows(sub: *mut c_void, ptr: *mut c_longlong, cols: *mut c_int, values: *mut c_double) -> c_int;
     fn tc_dist_destroy(dist: *mut RawDist);
     fn tc_ghost_create(n_owned: c_int, n_ghost: c_int, ghosts: *const c_int, out: *mut *mut RawVec) -> c_int;
     fn tc_ghost_set_and_update(v: *mut RawVec, owned: *const c_double) -> c_int;
@@ -377,6 +391,23 @@ pub enum DistributedPreconditioner {
     /// serial path's single-precision ILU(0), refactored only in the rows a linearization
     /// changes ([`crate::la::Ilu0::refactor_from`]), where PETSc's own refactors the whole block.
     BlockJacobiShell,
+    /// Restricted additive Schwarz with overlap 1: each rank's block is its rows and those of
+    /// the other ranks that they read (its overlap: [`DistributedMatrix::set_overlap`]), with
+    /// the caller's preconditioner of that overlapped block (its rows in the order [owned,
+    /// overlap]), of whose result each rank keeps its own entries (PETSc's `PCASM` of type
+    /// `restrict`, as a PCSHELL). Fewer Krylov iterations than block Jacobi, whose blocks lose
+    /// every coupling across the ranks (docs/distributed.md).
+    SchwarzShell,
+}
+
+impl DistributedPreconditioner {
+    /// Whether the caller gives the blocks' preconditioner ([`DistributedMatrix::solve_from`]).
+    pub fn is_shell(self) -> bool {
+        matches!(
+            self,
+            DistributedPreconditioner::BlockJacobiShell | DistributedPreconditioner::SchwarzShell
+        )
+    }
 }
 
 /// Parameters of the distributed GMRES (PETSc's KSPGMRES, right-preconditioned, stopped on
@@ -424,9 +455,9 @@ pub struct DistributedMatrix {
     /// How many entries this rank selected ([`DistributedMatrix::select`]).
     n_selected: Option<usize>,
     /// The arrays PETSc keeps this rank's rows in, where they are this crate's
-    /// ([`DistributedMatrix::from_split`]): never read here, only kept until PETSc's matrix is
-    /// destroyed (dropped after [`Drop::drop`]).
-    _storage: Option<Box<SplitStorage>>,
+    /// ([`DistributedMatrix::from_split`]): kept until PETSc's matrix is destroyed (dropped
+    /// after [`Drop::drop`]), read only by [`DistributedMatrix::split_rows`].
+    storage: Option<Box<SplitStorage>>,
 }
 
 /// Rows of a [`DistributedMatrix`] and their entries, in PETSc's index types
@@ -440,10 +471,33 @@ pub struct RowPattern {
 /// A rank's rows as CSR: row pointers (from 0), columns ascending within each row, values.
 pub type CsrParts = (Vec<usize>, Vec<u32>, Vec<f64>);
 
+/// A rank's rows as PETSc keeps them ([`DistributedMatrix::split_rows`]).
+#[derive(Clone, Copy)]
+pub struct SplitRows<'a> {
+    di: &'a [c_int],
+    dj: &'a [u32],
+    da: &'a [f64],
+    oi: &'a [c_int],
+    oa: &'a [f64],
+}
+
+impl<'a> SplitRows<'a> {
+    /// Row i: the diagonal block's columns (local) and values, and the off-diagonal part's
+    /// values (in the order of the columns given to `from_split`; PETSc may renumber its
+    /// columns, so the caller keeps those).
+    pub fn row(&self, i: usize) -> ((&'a [u32], &'a [f64]), &'a [f64]) {
+        let (d, o) = (
+            self.di[i] as usize..self.di[i + 1] as usize,
+            self.oi[i] as usize..self.oi[i + 1] as usize,
+        );
+        ((&self.dj[d.clone()], &self.da[d]), &self.oa[o])
+    }
+}
+
 /// The arrays of [`DistributedMatrix::from_split`], in PETSc's index type.
 struct SplitStorage {
-    _diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
-    _off_diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
+    diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
+    off_diagonal: (Vec<c_int>, Vec<u32>, Vec<f64>),
 }
 
 impl DistributedMatrix {
@@ -507,7 +561,7 @@ impl DistributedMatrix {
             n_coo,
             krylov: None,
             n_selected: None,
-            _storage: None,
+            storage: None,
         })
     }
 
@@ -581,19 +635,20 @@ impl DistributedMatrix {
             Ok(ptr.into_iter().map(|p| p as c_int).collect())
         };
         let mut storage = Box::new(SplitStorage {
-            _diagonal: (pointers(diagonal.0)?, diagonal.1, diagonal.2),
-            _off_diagonal: (pointers(off_diagonal.0)?, off_diagonal.1, off_diagonal.2),
+            diagonal: (pointers(diagonal.0)?, diagonal.1, diagonal.2),
+            off_diagonal: (pointers(off_diagonal.0)?, off_diagonal.1, off_diagonal.2),
         });
         let SplitStorage {
-            _diagonal: (di, dj, da),
-            _off_diagonal: (oi, oj, oa),
+            diagonal: (di, dj, da),
+            off_diagonal: (oi, oj, oa),
         } = &mut *storage;
         let mut raw = std::ptr::null_mut();
         let _petsc = petsc_lock();
         // SAFETY: checked CSR arrays of n_owned rows, every column below n_global ≤ c_int::MAX,
         // so the u32 columns read as c_int are the same numbers. PETSc keeps pointers to the
         // arrays: they live in `storage`, on the heap, until after tc_dist_destroy (the field
-        // drops after `Drop::drop`), and nothing here reads or moves them meanwhile.
+        // drops after `Drop::drop`), and nothing here moves or writes them meanwhile; they are
+        // read (`split_rows`) only between PETSc's calls, never during one.
         let code = unsafe {
             tc_dist_create_split(
                 n_owned32,
@@ -608,8 +663,94 @@ impl DistributedMatrix {
             )
         };
         let mut matrix = Self::created(OPERATION, (code, raw), owned, n_global, 0)?;
-        matrix._storage = Some(storage);
+        matrix.storage = Some(storage);
         Ok(matrix)
+    }
+
+    /// The overlap of this rank's block for [`DistributedPreconditioner::SchwarzShell`]: the
+    /// global rows `overlap` (ascending, none of this rank's), whose entries each application of
+    /// the preconditioner brings from their ranks (PETSc's scatter, made here once; a second
+    /// call replaces it); collective.
+    pub fn set_overlap(&mut self, overlap: &[usize]) -> Result<(), Error> {
+        const OPERATION: &str = "VecScatterCreate (overlap)";
+        if let Some(w) = overlap.windows(2).find(|w| w[0] >= w[1]) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("the overlap's rows are not ascending ({} then {})", w[0], w[1]),
+            });
+        }
+        if let Some(&g) = overlap.iter().find(|&&g| g >= self.n_global || self.owned.contains(&g)) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("row {g} in the overlap of rows {:?} of {}", self.owned, self.n_global),
+            });
+        }
+        let n = index32(OPERATION, overlap.len())?;
+        let overlap: Vec<c_int> = overlap.iter().map(|&g| g as c_int).collect();
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle; n global rows, each below n_global (checked), read during the call.
+        check(OPERATION, unsafe {
+            tc_dist_set_overlap(self.handle.as_ptr(), n, overlap.as_ptr())
+        })
+    }
+
+    /// The global rows `rows` (ascending, any rank's) restricted to the global columns `cols`
+    /// (ascending), as CSR whose columns are positions in `cols` (PETSc's
+    /// `MatCreateSubMatrices`); collective: every rank calls it, each with its own rows.
+    pub fn fetch_rows(&self, rows: &[usize], cols: &[usize]) -> Result<CsrParts, Error> {
+        const OPERATION: &str = "MatCreateSubMatrices";
+        for (what, list) in [("rows", rows), ("columns", cols)] {
+            if list.windows(2).any(|w| w[0] >= w[1]) || list.last().is_some_and(|&g| g >= self.n_global) {
+                return Err(Error::Petsc {
+                    operation: OPERATION,
+                    detail: format!("the {what} are not ascending below {}", self.n_global),
+                });
+            }
+        }
+        let as32 = |list: &[usize]| -> Result<Vec<c_int>, Error> {
+            index32(OPERATION, list.len())?;
+            Ok(list.iter().map(|&g| g as c_int).collect())
+        };
+        let (rows32, cols32) = (as32(rows)?, as32(cols)?);
+        let _petsc = petsc_lock();
+        let (mut sub, mut nnz) = (std::ptr::null_mut(), 0);
+        // SAFETY: a live handle; the index arrays have the lengths given, each index below
+        // n_global (checked), read during the call.
+        check(OPERATION, unsafe {
+            tc_dist_fetch_rows(
+                self.handle.as_ptr(),
+                rows32.len() as c_int,
+                rows32.as_ptr(),
+                cols32.len() as c_int,
+                cols32.as_ptr(),
+                &mut sub,
+                &mut nnz,
+            )
+        })?;
+        let nnz = nnz as usize;
+        let mut ptr: Vec<c_longlong> = vec![0; rows.len() + 1];
+        let (mut cols_out, mut values): (Vec<c_int>, Vec<f64>) = (vec![0; nnz], vec![0.0; nnz]);
+        // SAFETY: `sub` is the matrix the call above made, of rows.len() rows and nnz entries;
+        // the C layer destroys it.
+        check(OPERATION, unsafe {
+            tc_dist_take_rows(sub, ptr.as_mut_ptr(), cols_out.as_mut_ptr(), values.as_mut_ptr())
+        })?;
+        Ok((
+            ptr.into_iter().map(|p| p as usize).collect(),
+            cols_out.into_iter().map(|c| c as u32).collect(),
+            values,
+        ))
+    }
+
+    /// This rank's rows as PETSc keeps them, where they are this crate's arrays
+    /// ([`DistributedMatrix::from_split`]); `None` for a matrix made otherwise. For a caller
+    /// that reads the rows where they lie instead of keeping a copy (the overlapped block's
+    /// ILU(0) at set-up), between PETSc's calls.
+    pub fn split_rows(&self) -> Option<SplitRows<'_>> {
+        let storage = self.storage.as_deref()?;
+        let (di, dj, da) = &storage.diagonal;
+        let (oi, _, oa) = &storage.off_diagonal;
+        Some(SplitRows { di, dj, da, oi, oa })
     }
 
     /// The rows this rank owns.
@@ -693,10 +834,10 @@ impl DistributedMatrix {
         value: &[f64],
     ) -> Result<(Vec<f64>, DistributedSolveInfo), Error> {
         assert_eq!(index.len(), value.len(), "one value per index");
-        if params.preconditioner == DistributedPreconditioner::BlockJacobiShell {
+        if params.preconditioner.is_shell() {
             return Err(Error::Petsc {
                 operation: "KSPSolve",
-                detail: "block Jacobi with the caller's blocks takes them in solve_from".into(),
+                detail: "a preconditioner with the caller's blocks takes them in solve_from".into(),
             });
         }
         let index32 = index
@@ -737,6 +878,7 @@ impl DistributedMatrix {
                         DistributedPreconditioner::BlockJacobiIlu0 => 0,
                         DistributedPreconditioner::Gamg => 1,
                         DistributedPreconditioner::BlockJacobiShell => 2,
+                        DistributedPreconditioner::SchwarzShell => 3,
                     },
                     params.rtol,
                     params.max_iterations.min(c_int::MAX as usize) as c_int,
@@ -751,8 +893,9 @@ impl DistributedMatrix {
     /// Solves A x = b by GMRES from the initial guess x: `rhs` and `x` are this rank's owned
     /// entries of b and of x (PETSc's layout), x overwritten by the solution. Converged where
     /// ‖b − Ax‖ ≤ rtol ‖b‖, as the serial GMRES. `block`: the preconditioner of this rank's
-    /// block (its owned rows and columns, in PETSc's order) for
-    /// [`DistributedPreconditioner::BlockJacobiShell`], which needs one; unused otherwise.
+    /// block for [`DistributedPreconditioner::BlockJacobiShell`] (its owned rows and columns, in
+    /// PETSc's order) and [`DistributedPreconditioner::SchwarzShell`] (its owned rows, then its
+    /// overlap's), which need one; unused otherwise.
     pub fn solve_from(
         &mut self,
         params: &DistributedKrylov,
@@ -764,11 +907,11 @@ impl DistributedMatrix {
             rhs.len() == self.owned.len() && x.len() == self.owned.len(),
             "the owned entries"
         );
-        let shell = params.preconditioner == DistributedPreconditioner::BlockJacobiShell;
+        let shell = params.preconditioner.is_shell();
         if shell && block.is_none() {
             return Err(Error::Petsc {
                 operation: "KSPSolve",
-                detail: "block Jacobi with the caller's blocks, but no block preconditioner given".into(),
+                detail: "a preconditioner with the caller's blocks, but no block preconditioner given".into(),
             });
         }
         let _petsc = petsc_lock();

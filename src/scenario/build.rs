@@ -643,6 +643,7 @@ impl Scenario {
                 rtol: s.krylov_tolerance,
                 max_iterations: s.max_krylov,
                 preconditioner: s.preconditioner,
+                overlap: s.overlap,
                 ..KrylovParams::default()
             },
             anderson_depth: s.anderson_depth,

@@ -642,6 +642,7 @@ pub struct SolverSpec {
     pub krylov_tolerance: f64,
     pub max_krylov: usize,
     pub preconditioner: PreconditionerKind,
+    pub overlap: usize,
     pub anderson_depth: usize,
 }
 

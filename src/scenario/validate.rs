@@ -5,7 +5,7 @@
 use super::{FrictionSpec, HeatExchangeSpec, Scenario};
 use crate::error::Error;
 use crate::mesh;
-use crate::step::{LinearKind, PreconditionerKind};
+use crate::step::{LinearKind, PreconditionerKind, MAX_OVERLAP};
 
 /// The deepest cutback a scenario may ask for: 2^20 substeps of one step is already a
 /// different time grid, not a rescue.
@@ -295,6 +295,13 @@ impl Scenario {
                 "solver.anderson_depth",
                 &s.anderson_depth,
                 &format!("at most {MAX_ANDERSON_DEPTH} (0 turns the acceleration off)"),
+            ));
+        }
+        if s.overlap > MAX_OVERLAP {
+            return Err(invalid(
+                "solver.overlap",
+                &s.overlap,
+                "0 (block Jacobi over the ranks) or 1 (restricted additive Schwarz)",
             ));
         }
         if s.preconditioner == PreconditionerKind::Amg && !cfg!(feature = "petsc") {

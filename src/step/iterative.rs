@@ -175,9 +175,10 @@ fn ilu_needs_amg(
 /// The step matrix of step size k on this rank of a distributed run and its Krylov solver over
 /// the ranks: Ã's rows this rank owns handed to PETSc, and of Ã itself only the rows from
 /// `first_contact` on kept (those each linearization changes, on every rank), the rows before
-/// left empty; the preconditioner from `params.preconditioner`: block Jacobi with each rank's
-/// block's ILU(0) for `ilu`, PETSc's GAMG for `amg`, and for `auto` the serial rule's probe
-/// with block Jacobi (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
+/// left empty; the preconditioner from `params.preconditioner`: for `ilu` restricted additive
+/// Schwarz with each rank's overlapped block's ILU(0) (block Jacobi with its own block's where
+/// `params.overlap` is 0), PETSc's GAMG for `amg`, and for `auto` the serial rule's probe with
+/// the `ilu` one (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
 /// [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
 #[cfg(feature = "mpi")]
 fn ranks_system(
@@ -196,6 +197,8 @@ fn ranks_system(
     };
     let first = if params.preconditioner == PreconditionerKind::Amg {
         DistributedPreconditioner::Gamg
+    } else if params.overlap > 0 {
+        DistributedPreconditioner::SchwarzShell
     } else {
         DistributedPreconditioner::BlockJacobiShell
     };
@@ -319,14 +322,15 @@ impl KrylovSystem {
     }
 
     /// The preconditioner set up: [`PreconditionerKind::Ilu`] or [`PreconditionerKind::Amg`]
-    /// (`auto` resolved; in a distributed run, block Jacobi + ILU(0) or PETSc's GAMG).
+    /// (`auto` resolved; in a distributed run, ILU(0) on the ranks' blocks or PETSc's GAMG).
     pub fn preconditioner(&self) -> PreconditionerKind {
         #[cfg(feature = "mpi")]
         if let KrylovSolver::Ranks(ranks) = &self.lock().1 {
             return match ranks.preconditioner() {
                 crate::la::mpi::DistributedPreconditioner::Gamg => PreconditionerKind::Amg,
                 crate::la::mpi::DistributedPreconditioner::BlockJacobiIlu0
-                | crate::la::mpi::DistributedPreconditioner::BlockJacobiShell => PreconditionerKind::Ilu,
+                | crate::la::mpi::DistributedPreconditioner::BlockJacobiShell
+                | crate::la::mpi::DistributedPreconditioner::SchwarzShell => PreconditionerKind::Ilu,
             };
         }
         if self.amg.is_some() {
