@@ -101,7 +101,9 @@ pub struct Summary {
     pub convexification_iterations: usize,
     pub inner_iterations: usize,
     pub max_convexification_per_step: usize,
-    /// Semismooth Newton iterations (fast solver).
+    /// Semismooth Newton iterations (fast solver) of the steps kept: the sum of `steps.csv`'s
+    /// column. Those of attempts given up and cut back are not in it; on the iterative path each
+    /// Newton iteration is one solve, so `linear_solves` counts them all.
     pub newton_iterations: usize,
     /// Steps the fast solver took through the convexification loop (law too steep for Newton).
     pub fallback_steps: usize,
