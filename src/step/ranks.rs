@@ -19,7 +19,12 @@
 //! GAMG, from the previous iterate as the serial solves do. Each rank's unknowns are numbered in
 //! the system's order, so its block has its Γ_C rows last (then, with Schwarz, its overlap's
 //! rows) and its ILU(0) is the serial path's: single precision, refactored only from the first
-//! row a linearization changes ([`RankBlock`]).
+//! row a linearization changes ([`RankBlock`]). Of the solution each rank takes its own
+//! rows and gathers those the next linearization reads, the columns of Ã's Γ_C rows (the same
+//! on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
+//! and the cutback decision are computed from the same numbers on every rank and agree without
+//! a reduction: the ranks take the same branches by construction. The whole solution is
+//! gathered once per step, for the state ([`RankKrylov::gather_whole`]).
 //!
 //! **Why the blocks overlap.** Block Jacobi drops every coupling between two ranks' unknowns,
 //! so its Krylov count grows with the ranks (344 iterations against one process's 303 at 972k
@@ -28,16 +33,11 @@
 //! its block's solution (restricted additive Schwarz: Cai & Sarkis, SIAM J. Sci. Comput. 21
 //! (1999); PETSc's `PCASM` of type `restrict`), the count is one process's again: 304. The
 //! overlap costs one scatter of its entries per application and 1.3 % more rows in each ILU(0)
-//! at 972k on 2 ranks (6 254 rows); the time per step fell 3.55–3.60 → 3.37–3.41 s there (docs/distributed.md).
-//! PETSc's own `PCASM` (overlap 1, ILU(0) in double precision, refactored whole at each
+//! at 972k on 2 ranks (6 254 rows); the time per step fell 3.55–3.60 → 3.37–3.41 s there
+//! (docs/distributed.md). PETSc's own `PCASM` (overlap 1, ILU(0) in double precision, refactored whole at each
 //! linearization) took 90 Krylov iterations where this takes 86 (98k unknowns, 4 steps, 2
 //! ranks), but 0.49 s per step against 0.12 s: this crate's ILU(0) keeps the rows that no
-//! linearization changes. Of the solution each rank takes its own
-//! rows and gathers those the next linearization reads, the columns of Ã's Γ_C rows (the same
-//! on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
-//! and the cutback decision are computed from the same numbers on every rank and agree without
-//! a reduction: the ranks take the same branches by construction. The whole solution is
-//! gathered once per step, for the state ([`RankKrylov::gather_whole`]).
+//! linearization changes.
 //!
 //! **Why replicate the iterates rather than distribute the Newton method too.** The nodal law
 //! and the stop tests read Γ_C's unknowns and their neighbours', O(|Γ_C|) per Newton iteration,
