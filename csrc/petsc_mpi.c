@@ -323,6 +323,17 @@ static PetscErrorCode tc_dist_overlap_apply(PC pc, Vec r, Vec z)
   PetscFunctionReturn(0);
 }
 
+/* An index set on this rank of n indices given as ints (PetscInt may be wider). */
+static PetscErrorCode tc_is_of_ints(int n, const int *indices, IS *is)
+{
+  PetscInt *idx;
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(n, &idx));
+  for (int e = 0; e < n; ++e) idx[e] = indices[e];
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n, idx, PETSC_OWN_POINTER, is));
+  PetscFunctionReturn(0);
+}
+
 /* The overlap of this rank's block for restricted additive Schwarz: the global rows `overlap`
  * (n, ascending, none of this rank's) whose entries each application brings from their ranks;
  * made once, replaces an earlier one; collective (the scatter's set-up). */
@@ -337,7 +348,7 @@ static PetscErrorCode tc_dist_overlap_setup(tc_dist *dist, int n, const int *ove
   free(dist->overlap_out);
   dist->overlap_in = dist->overlap_out = NULL;
   PetscCall(VecGetLocalSize(dist->x, &n_owned));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n, overlap, PETSC_COPY_VALUES, &is));
+  PetscCall(tc_is_of_ints(n, overlap, &is));
   PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &dist->overlap));
   PetscCall(VecScatterCreate(dist->x, is, dist->overlap, NULL, &dist->to_overlap));
   PetscCall(ISDestroy(&is));
@@ -366,8 +377,8 @@ static PetscErrorCode tc_dist_fetch_setup(tc_dist *dist, int n_rows, const int *
   const PetscInt *ia, *ja;
   PetscBool       done;
   PetscFunctionBeginUser;
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n_rows, rows, PETSC_COPY_VALUES, &is[0]));
-  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, n_cols, cols, PETSC_COPY_VALUES, &is[1]));
+  PetscCall(tc_is_of_ints(n_rows, rows, &is[0]));
+  PetscCall(tc_is_of_ints(n_cols, cols, &is[1]));
   PetscCall(MatCreateSubMatrices(dist->A, 1, &is[0], &is[1], MAT_INITIAL_MATRIX, &subs));
   PetscCall(ISDestroy(&is[0]));
   PetscCall(ISDestroy(&is[1]));
