@@ -268,6 +268,17 @@ int tc_dist_set_values(tc_dist *dist, const double *values)
   return (int)MatSetValuesCOO(dist->A, values, INSERT_VALUES);
 }
 
+/* The caller's preconditioner of this rank's block on the n entries of r into z. */
+static PetscErrorCode tc_dist_call_block(tc_dist *dist, const PetscScalar *r, PetscScalar *z, PetscInt n)
+{
+  int code;
+  PetscFunctionBeginUser;
+  PetscCheck(dist->block_apply, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no block preconditioner given for this solve");
+  code = dist->block_apply(dist->block_ctx, r, z, (int)n);
+  PetscCheck(code == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "the block preconditioner of this rank failed (%d)", code);
+  PetscFunctionReturn(0);
+}
+
 /* PCApply of block Jacobi with the caller's preconditioner of each rank's block: the owned
  * entries of r through dist->block_apply. */
 static PetscErrorCode tc_dist_block_apply(PC pc, Vec r, Vec z)
@@ -276,17 +287,15 @@ static PetscErrorCode tc_dist_block_apply(PC pc, Vec r, Vec z)
   const PetscScalar *rv;
   PetscScalar       *zv;
   PetscInt           n;
-  int                code;
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &dist));
-  PetscCheck(dist->block_apply, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no block preconditioner given for this solve");
   PetscCall(VecGetLocalSize(r, &n));
   PetscCall(VecGetArrayRead(r, &rv));
   PetscCall(VecGetArrayWrite(z, &zv));
-  code = dist->block_apply(dist->block_ctx, rv, zv, (int)n);
+  PetscErrorCode applied = tc_dist_call_block(dist, rv, zv, n);
   PetscCall(VecRestoreArrayWrite(z, &zv));
   PetscCall(VecRestoreArrayRead(r, &rv));
-  PetscCheck(code == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "the block preconditioner of this rank failed (%d)", code);
+  PetscCall(applied);
   PetscFunctionReturn(0);
 }
 
@@ -300,10 +309,8 @@ static PetscErrorCode tc_dist_overlap_apply(PC pc, Vec r, Vec z)
   const PetscScalar *rv, *gv;
   PetscScalar       *zv;
   PetscInt           n;
-  int                code;
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &dist));
-  PetscCheck(dist->block_apply, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no block preconditioner given for this solve");
   PetscCheck(dist->to_overlap, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no overlap set (tc_dist_set_overlap)");
   PetscCall(VecScatterBegin(dist->to_overlap, r, dist->overlap, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(dist->to_overlap, r, dist->overlap, INSERT_VALUES, SCATTER_FORWARD));
@@ -314,9 +321,7 @@ static PetscErrorCode tc_dist_overlap_apply(PC pc, Vec r, Vec z)
   PetscCall(VecGetArrayRead(dist->overlap, &gv));
   memcpy(dist->overlap_in + n, gv, (size_t)dist->n_overlap * sizeof(PetscScalar));
   PetscCall(VecRestoreArrayRead(dist->overlap, &gv));
-  code = dist->block_apply(dist->block_ctx, dist->overlap_in, dist->overlap_out, (int)(n + dist->n_overlap));
-  PetscCheck(code == 0, PETSC_COMM_SELF, PETSC_ERR_LIB, "the overlapped block preconditioner of this rank failed (%d)",
-             code);
+  PetscCall(tc_dist_call_block(dist, dist->overlap_in, dist->overlap_out, n + dist->n_overlap));
   PetscCall(VecGetArrayWrite(z, &zv));
   memcpy(zv, dist->overlap_out, (size_t)n * sizeof(PetscScalar));
   PetscCall(VecRestoreArrayWrite(z, &zv));
