@@ -159,6 +159,14 @@ struct tc_dist {
   Vec          overlap;
   PetscInt     n_overlap;
   PetscScalar *overlap_in, *overlap_out;
+  /* The coarse correction of preconditioner 4 (tc_dist_set_velocity_amg): GAMG on the
+   * velocity block in the nodes' padded numbering, its vectors, the slot of each of this rank's
+   * velocity rows (local row, local slot), and two vectors of A's layout. */
+  Mat       velocity;
+  KSP       amg;
+  Vec       coarse_in, coarse_out, residual, sweep;
+  PetscInt  n_slots;
+  PetscInt *slot_row, *slot;
 };
 typedef struct tc_dist tc_dist;
 
@@ -173,6 +181,13 @@ void tc_dist_destroy(tc_dist *dist)
   VecDestroy(&dist->overlap);
   free(dist->overlap_in);
   free(dist->overlap_out);
+  KSPDestroy(&dist->amg);
+  MatDestroy(&dist->velocity);
+  VecDestroy(&dist->coarse_in);
+  VecDestroy(&dist->coarse_out);
+  VecDestroy(&dist->residual);
+  VecDestroy(&dist->sweep);
+  PetscFree2(dist->slot_row, dist->slot);
   KSPDestroy(&dist->ksp);
   MatDestroy(&dist->A);
   VecDestroy(&dist->b);
@@ -326,6 +341,119 @@ static PetscErrorCode tc_dist_overlap_apply(PC pc, Vec r, Vec z)
   memcpy(zv, dist->overlap_out, (size_t)n * sizeof(PetscScalar));
   PetscCall(VecRestoreArrayWrite(z, &zv));
   PetscFunctionReturn(0);
+}
+
+/* r − A z into dist->residual. */
+static PetscErrorCode tc_dist_residual(tc_dist *dist, Vec r, Vec z)
+{
+  PetscFunctionBeginUser;
+  PetscCall(MatMult(dist->A, z, dist->residual));
+  PetscCall(VecAYPX(dist->residual, -1.0, r));
+  PetscFunctionReturn(0);
+}
+
+/* PCApply of the two-level method: restricted additive Schwarz sweeps around GAMG's V-cycle on
+ * the velocity block (the serial path's `amg`, src/step/amg.rs):
+ *   z = S r;  z += Rᵀ B⁻¹ R (r − A z);  z += S (r − A z)
+ * with S the Schwarz sweep, R this rank's velocity rows to their padded slots. */
+static PetscErrorCode tc_dist_two_level_apply(PC pc, Vec r, Vec z)
+{
+  tc_dist           *dist;
+  const PetscScalar *t;
+  PetscScalar       *c, *zv;
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &dist));
+  PetscCheck(dist->amg, PETSC_COMM_SELF, PETSC_ERR_ORDER, "no velocity AMG set (tc_dist_set_velocity_amg)");
+  PetscCall(tc_dist_overlap_apply(pc, r, z));
+  PetscCall(tc_dist_residual(dist, r, z));
+  PetscCall(VecZeroEntries(dist->coarse_in));
+  PetscCall(VecGetArrayRead(dist->residual, &t));
+  PetscCall(VecGetArray(dist->coarse_in, &c));
+  for (PetscInt e = 0; e < dist->n_slots; ++e) c[dist->slot[e]] = t[dist->slot_row[e]];
+  PetscCall(VecRestoreArray(dist->coarse_in, &c));
+  PetscCall(VecRestoreArrayRead(dist->residual, &t));
+  PetscCall(KSPSolve(dist->amg, dist->coarse_in, dist->coarse_out));
+  PetscCall(VecGetArrayRead(dist->coarse_out, &t));
+  PetscCall(VecGetArray(z, &zv));
+  for (PetscInt e = 0; e < dist->n_slots; ++e) zv[dist->slot_row[e]] += t[dist->slot[e]];
+  PetscCall(VecRestoreArray(z, &zv));
+  PetscCall(VecRestoreArrayRead(dist->coarse_out, &t));
+  PetscCall(tc_dist_residual(dist, r, z));
+  PetscCall(tc_dist_overlap_apply(pc, dist->residual, dist->sweep));
+  PetscCall(VecAXPY(z, 1.0, dist->sweep));
+  PetscFunctionReturn(0);
+}
+
+/* GAMG on the velocity block for preconditioner 4: this rank's n_owned rows of it (row_ptr,
+ * global columns, values; block size bs, a node's bs slots consecutive), its n_modes
+ * near-nullspace vectors (this rank's n_owned entries of each, one after the other), and the
+ * slot of each of this rank's n_slots velocity rows of A (slot_row[e]: A's local row, slot[e]:
+ * the block's local row). The finest level does no smoothing: the Schwarz sweeps are its
+ * smoother (the serial path's rule). Collective. */
+static PetscErrorCode tc_dist_velocity_amg_setup(tc_dist *dist, int n_owned, int bs, const int *row_ptr,
+                                                 const int *col, const double *val, int n_modes,
+                                                 const double *modes, int n_slots, const int *slot_row,
+                                                 const int *slot)
+{
+  PetscInt    *i, *j, levels;
+  MatNullSpace nsp;
+  Vec         *vecs;
+  PC           pc;
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(n_owned + 1, &i, row_ptr[n_owned], &j));
+  for (int r = 0; r <= n_owned; ++r) i[r] = row_ptr[r];
+  for (int e = 0; e < row_ptr[n_owned]; ++e) j[e] = col[e];
+  PetscCall(MatCreate(PETSC_COMM_WORLD, &dist->velocity));
+  PetscCall(MatSetSizes(dist->velocity, n_owned, n_owned, PETSC_DETERMINE, PETSC_DETERMINE));
+  PetscCall(MatSetBlockSize(dist->velocity, bs));
+  PetscCall(MatSetType(dist->velocity, MATMPIAIJ));
+  PetscCall(MatMPIAIJSetPreallocationCSR(dist->velocity, i, j, val));
+  PetscCall(PetscFree2(i, j));
+  PetscCall(MatSetOption(dist->velocity, MAT_SPD, PETSC_TRUE));
+  PetscCall(MatCreateVecs(dist->velocity, &dist->coarse_in, &dist->coarse_out));
+  PetscCall(VecDuplicateVecs(dist->coarse_in, n_modes, &vecs));
+  for (int m = 0; m < n_modes; ++m) {
+    PetscScalar *v;
+    PetscCall(VecGetArrayWrite(vecs[m], &v));
+    memcpy(v, modes + (size_t)m * (size_t)n_owned, (size_t)n_owned * sizeof(double));
+    PetscCall(VecRestoreArrayWrite(vecs[m], &v));
+  }
+  PetscCall(MatNullSpaceCreate(PETSC_COMM_WORLD, PETSC_FALSE, n_modes, vecs, &nsp));
+  PetscCall(MatSetNearNullSpace(dist->velocity, nsp));
+  PetscCall(MatNullSpaceDestroy(&nsp));
+  PetscCall(VecDestroyVecs(n_modes, &vecs));
+  PetscCall(KSPCreate(PETSC_COMM_WORLD, &dist->amg));
+  PetscCall(KSPSetOptionsPrefix(dist->amg, "tc_dist_amg_"));
+  PetscCall(KSPSetOperators(dist->amg, dist->velocity, dist->velocity));
+  PetscCall(KSPSetType(dist->amg, KSPPREONLY));
+  PetscCall(KSPGetPC(dist->amg, &pc));
+  PetscCall(PCSetType(pc, PCGAMG));
+  PetscCall(KSPSetFromOptions(dist->amg));
+  PetscCall(KSPSetUp(dist->amg));
+  PetscCall(PCMGGetLevels(pc, &levels));
+  if (levels > 1) {
+    KSP finest;
+    PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
+    PetscCall(KSPSetType(finest, KSPRICHARDSON));
+    PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, 0));
+  }
+  PetscCall(VecDuplicate(dist->x, &dist->residual));
+  PetscCall(VecDuplicate(dist->x, &dist->sweep));
+  PetscCall(PetscMalloc2(n_slots, &dist->slot_row, n_slots, &dist->slot));
+  for (int e = 0; e < n_slots; ++e) {
+    dist->slot_row[e] = slot_row[e];
+    dist->slot[e]     = slot[e];
+  }
+  dist->n_slots = n_slots;
+  PetscFunctionReturn(0);
+}
+
+int tc_dist_set_velocity_amg(tc_dist *dist, int n_owned, int bs, const int *row_ptr, const int *col,
+                             const double *val, int n_modes, const double *modes, int n_slots, const int *slot_row,
+                             const int *slot)
+{
+  return (int)tc_dist_velocity_amg_setup(dist, n_owned, bs, row_ptr, col, val, n_modes, modes, n_slots, slot_row,
+                                         slot);
 }
 
 /* An index set on this rank of n indices given as ints (PetscInt may be wider). */
@@ -482,6 +610,11 @@ static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, do
     PetscCall(PCShellSetContext(pc, dist));
     PetscCall(PCShellSetApply(pc, tc_dist_overlap_apply));
     PetscCall(PCShellSetName(pc, "restricted additive Schwarz, overlap 1, each rank's block by thermocontact's ILU(0)"));
+  } else if (preconditioner == 4) {
+    PetscCall(PCSetType(pc, PCSHELL));
+    PetscCall(PCShellSetContext(pc, dist));
+    PetscCall(PCShellSetApply(pc, tc_dist_two_level_apply));
+    PetscCall(PCShellSetName(pc, "restricted additive Schwarz sweeps around GAMG on the velocity block"));
   } else {
     /* Block Jacobi, one block per rank, each ILU(0) (PETSc's default sub-solver). */
     PetscCall(PCSetType(pc, PCBJACOBI));

@@ -7,8 +7,9 @@
 //! by rows, with its right-hand side and GMRES preconditioned by block Jacobi (PETSc's ILU(0)
 //! or the caller's preconditioner of each rank's block), restricted additive Schwarz (the
 //! caller's preconditioner of each rank's overlapped block: its rows and those of other ranks
-//! that they read, [`DistributedMatrix::set_overlap`], fetched by [`DistributedMatrix::fetch_rows`])
-//! or GAMG; a
+//! that they read, [`DistributedMatrix::set_overlap`], fetched by [`DistributedMatrix::fetch_rows`]),
+//! those sweeps around GAMG on a velocity block ([`DistributedMatrix::set_velocity_amg`]), or
+//! GAMG on the whole matrix; a
 //! [`GhostedVector`] (PETSc's `VecGhost`): owned entries and the copies a rank reads of its
 //! neighbours', refreshed by PETSc.
 //!
@@ -126,6 +127,19 @@ extern "C" {
     fn tc_dist_select(dist: *mut RawDist, n: c_int, indices: *const c_int) -> c_int;
     fn tc_dist_gather_selected(dist: *mut RawDist, out: *mut c_double) -> c_int;
     fn tc_dist_set_overlap(dist: *mut RawDist, n: c_int, overlap: *const c_int) -> c_int;
+    fn tc_dist_set_velocity_amg(
+        dist: *mut RawDist,
+        n_owned: c_int,
+        bs: c_int,
+        row_ptr: *const c_int,
+        col: *const c_int,
+        val: *const c_double,
+        n_modes: c_int,
+        modes: *const c_double,
+        n_slots: c_int,
+        slot_row: *const c_int,
+        slot: *const c_int,
+    ) -> c_int;
     fn tc_dist_fetch_rows(
         dist: *mut RawDist,
         n_rows: c_int,
@@ -398,6 +412,11 @@ pub enum DistributedPreconditioner {
     /// `restrict`, as a PCSHELL). Fewer Krylov iterations than block Jacobi, whose blocks lose
     /// every coupling across the ranks (docs/distributed.md).
     SchwarzShell,
+    /// [`DistributedPreconditioner::SchwarzShell`]'s sweeps around one V-cycle of PETSc's
+    /// GAMG on the velocity block ([`DistributedMatrix::set_velocity_amg`]): z = S r, z +=
+    /// Rᵀ B⁻¹ R (r − A z), z += S (r − A z), the serial path's two-level method
+    /// (`crate::step::amg`) over the ranks: bounded iterations where the stiffness weighs.
+    SchwarzAmgShell,
 }
 
 impl DistributedPreconditioner {
@@ -405,7 +424,9 @@ impl DistributedPreconditioner {
     pub fn is_shell(self) -> bool {
         matches!(
             self,
-            DistributedPreconditioner::BlockJacobiShell | DistributedPreconditioner::SchwarzShell
+            DistributedPreconditioner::BlockJacobiShell
+                | DistributedPreconditioner::SchwarzShell
+                | DistributedPreconditioner::SchwarzAmgShell
         )
     }
 }
@@ -694,6 +715,55 @@ impl DistributedMatrix {
         })
     }
 
+    /// GAMG on the velocity block for [`DistributedPreconditioner::SchwarzAmgShell`]: this
+    /// rank's rows of the block (`rows`: CSR, global columns, in the block's own layout with
+    /// `block_size` slots per node, this rank's consecutive), its near-nullspace (`modes`: this
+    /// rank's entries of each), and `slots`: for each velocity row of this matrix on this rank
+    /// (local index), the block's row (local index) it is restricted to; collective.
+    pub fn set_velocity_amg(
+        &mut self,
+        rows: (&[usize], &[u32], &[f64]),
+        block_size: usize,
+        modes: &[Vec<f64>],
+        slots: &[(u32, u32)],
+    ) -> Result<(), Error> {
+        const OPERATION: &str = "PCGAMG (velocity block)";
+        let (ptr, col, val) = rows;
+        let n = ptr.len() - 1;
+        index32(OPERATION, ptr[n])?;
+        let ptr32: Vec<c_int> = ptr.iter().map(|&p| p as c_int).collect();
+        let col32: Vec<c_int> = col
+            .iter()
+            .map(|&c| index32(OPERATION, c as usize))
+            .collect::<Result<_, _>>()?;
+        if let Some(m) = modes.iter().position(|m| m.len() != n) {
+            return Err(Error::Petsc {
+                operation: OPERATION,
+                detail: format!("mode {m} has {} entries for {n} rows", modes[m].len()),
+            });
+        }
+        let flat: Vec<f64> = modes.iter().flatten().copied().collect();
+        let (slot_row, slot): (Vec<c_int>, Vec<c_int>) = slots.iter().map(|&(r, q)| (r as c_int, q as c_int)).unzip();
+        let _petsc = petsc_lock();
+        // SAFETY: a live handle; CSR arrays of n rows (ptr has n + 1 entries, col and val
+        // ptr[n]), modes.len() vectors of n values, slots.len() pairs, all read during the call.
+        check(OPERATION, unsafe {
+            tc_dist_set_velocity_amg(
+                self.handle.as_ptr(),
+                index32(OPERATION, n)?,
+                block_size as c_int,
+                ptr32.as_ptr(),
+                col32.as_ptr(),
+                val.as_ptr(),
+                modes.len() as c_int,
+                flat.as_ptr(),
+                index32(OPERATION, slots.len())?,
+                slot_row.as_ptr(),
+                slot.as_ptr(),
+            )
+        })
+    }
+
     /// The global rows `rows` (ascending, any rank's) restricted to the global columns `cols`
     /// (ascending), as CSR whose columns are positions in `cols` (PETSc's
     /// `MatCreateSubMatrices`); collective: every rank calls it, each with its own rows.
@@ -879,6 +949,7 @@ impl DistributedMatrix {
                         DistributedPreconditioner::Gamg => 1,
                         DistributedPreconditioner::BlockJacobiShell => 2,
                         DistributedPreconditioner::SchwarzShell => 3,
+                        DistributedPreconditioner::SchwarzAmgShell => 4,
                     },
                     params.rtol,
                     params.max_iterations.min(c_int::MAX as usize) as c_int,

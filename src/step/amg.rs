@@ -26,6 +26,13 @@
 //! padded to d (a held direction gets an identity row) so that GAMG aggregates nodes, with the
 //! rigid-body modes, written in the same frames, as its near-nullspace.
 //!
+//! **Over the ranks** of a distributed run (`crate::step::ranks`) the same method runs on PETSc:
+//! each rank's ILU(0) sweeps (restricted additive Schwarz, or block Jacobi) around GAMG on the
+//! velocity block distributed by nodes, the rank's own nodes' padded slots consecutive
+//! (`RankVelocityBlock`, the C layer's `tc_dist_two_level_apply`). GAMG on the whole coupled
+//! Ã instead, which the distributed path first used for `amg`, stalled near 10⁻⁸ on the brake
+//! pad (`scenarios/brake_pad3d.toml`) and its run stopped in the first step on 2 ranks.
+//!
 //! **Rejected.** A block-diagonal preconditioner diag(AMG(A_ww), ILU(A_θθ)) (the krylov study's
 //! first plan) drops the coupling G of velocity and temperature and the contact rows: the stick
 //! rows of Ã are far from A's, and GMRES would have to find a rank-n_t perturbation.
@@ -163,6 +170,103 @@ impl Preconditioner for TwoLevel<'_> {
 
     fn method(&self) -> &'static str {
         "GMRES + ILU(0) with AMG (GAMG)"
+    }
+}
+
+/// A rank's share of the velocity block for the distributed two-level method
+/// (`crate::la::mpi::DistributedPreconditioner::SchwarzAmgShell`): the block's rows at the
+/// padded slots of the rank's own nodes (the nodes ordered by owner, then by index: each rank's
+/// slots consecutive), in global columns; those rows' part of the near-nullspace; and for each
+/// of the rank's rows of the system (local index) that is a velocity, its slot (local index).
+#[cfg(feature = "mpi")]
+pub(crate) struct RankVelocityBlock {
+    pub rows: (Vec<usize>, Vec<u32>, Vec<f64>),
+    pub modes: Vec<Vec<f64>>,
+    pub slots: Vec<(u32, u32)>,
+}
+
+#[cfg(feature = "mpi")]
+impl RankVelocityBlock {
+    /// The share of rank `rank` from `a`, which holds (at least) the rank's rows `owned` of
+    /// the step matrix (row i the unknown `order[i]`), with `node_owner` the rank of each node.
+    pub(crate) fn new(
+        problem: &Problem,
+        a: &CsrMatrix,
+        order: &[usize],
+        owned: &[usize],
+        (node_owner, rank): (&[usize], usize),
+    ) -> Result<Self, Error> {
+        let d = problem.dim();
+        let n_w = problem.velocity.n_free;
+        let padded = padded_slots(problem)?;
+        let n_parts = node_owner.iter().copied().max().map_or(1, |m| m + 1);
+        let mut first_node = vec![0usize; n_parts + 1];
+        node_owner.iter().for_each(|&o| first_node[o + 1] += 1);
+        (0..n_parts).for_each(|r| first_node[r + 1] += first_node[r]);
+        // The position of each node among the nodes ordered by owner, then by index.
+        let mut next = first_node.clone();
+        let position: Vec<usize> = node_owner
+            .iter()
+            .map(|&o| {
+                next[o] += 1;
+                next[o] - 1
+            })
+            .collect();
+        let global = |u: usize| -> Result<u32, Error> {
+            let q = padded[u] as usize;
+            index32(d * position[q / d] + q % d)
+        };
+        let first_slot = d * first_node[rank];
+        let n_slots = d * (first_node[rank + 1] - first_node[rank]);
+        let mut row_of_slot = vec![None; n_slots];
+        let mut slots = Vec::new();
+        for (l, &i) in owned.iter().enumerate() {
+            let u = order[i];
+            if u < n_w {
+                let q = global(u)? as usize - first_slot;
+                row_of_slot[q] = Some(i);
+                slots.push((index32(l)?, index32(q)?));
+            }
+        }
+        let held: Vec<f64> = row_of_slot.iter().flatten().map(|&i| a.diagonal(i)).collect();
+        let mean_diagonal = held.iter().sum::<f64>() / held.len().max(1) as f64;
+        let (mut ptr, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
+        let mut entries: Vec<(u32, f64)> = Vec::new();
+        for (q, row) in row_of_slot.iter().enumerate() {
+            entries.clear();
+            match row {
+                Some(i) => {
+                    let (cols, vals) = a.row(*i);
+                    for (&c, &v) in cols.iter().zip(vals) {
+                        if order[c as usize] < n_w {
+                            entries.push((global(order[c as usize])?, v));
+                        }
+                    }
+                    entries.sort_unstable_by_key(|e| e.0);
+                }
+                // A direction the node's constraints hold: an identity row of A's scale.
+                None => entries.push((index32(first_slot + q)?, mean_diagonal)),
+            }
+            col.extend(entries.iter().map(|e| e.0));
+            val.extend(entries.iter().map(|e| e.1));
+            ptr.push(col.len());
+        }
+        let own_nodes: Vec<usize> = (0..node_owner.len()).filter(|&p| node_owner[p] == rank).collect();
+        let modes = rigid_body_modes(problem, &padded)
+            .into_iter()
+            .map(|mode| {
+                own_nodes
+                    .iter()
+                    .flat_map(|&p| (0..d).map(move |k| (p, k)))
+                    .map(|(p, k)| mode[d * p + k])
+                    .collect()
+            })
+            .collect();
+        Ok(RankVelocityBlock {
+            rows: (ptr, col, val),
+            modes,
+            slots,
+        })
     }
 }
 

@@ -177,8 +177,9 @@ fn ilu_needs_amg(
 /// `first_contact` on kept (those each linearization changes, on every rank), the rows before
 /// left empty; the preconditioner from `params.preconditioner`: for `ilu` restricted additive
 /// Schwarz with each rank's overlapped block's ILU(0) (block Jacobi with its own block's where
-/// `params.overlap` is 0), PETSc's GAMG for `amg`, and for `auto` the serial rule's probe with
-/// the `ilu` one (the first step's system from zero to 10⁻⁸, GAMG where it needs more than
+/// `params.overlap` is 0), those sweeps around PETSc's GAMG on the velocity block for `amg`
+/// (the serial path's two-level method), and for `auto` the serial rule's probe with the `ilu`
+/// one (the first step's system from zero to 10⁻⁸, `amg` where it needs more than
 /// [`PreconditionerKind::AUTO_AMG_ABOVE`] iterations).
 #[cfg(feature = "mpi")]
 fn ranks_system(
@@ -195,9 +196,9 @@ fn ranks_system(
         max_iterations,
         restart: params.restart,
     };
-    let first = if params.preconditioner == PreconditionerKind::Amg {
-        DistributedPreconditioner::Gamg
-    } else if params.overlap > 0 {
+    // The one-level sweeps: the blocks overlapping or not; `amg` adds GAMG on the velocity
+    // block between two of them (`RankKrylov::set_velocity_amg`).
+    let first = if params.overlap > 0 {
         DistributedPreconditioner::SchwarzShell
     } else {
         DistributedPreconditioner::BlockJacobiShell
@@ -209,7 +210,9 @@ fn ranks_system(
         (a, first_contact),
         krylov(first, params.rtol, params.max_iterations),
     )?;
-    if params.preconditioner == PreconditionerKind::Auto {
+    if params.preconditioner == PreconditionerKind::Amg {
+        ranks.set_velocity_amg(problem, k, order)?;
+    } else if params.preconditioner == PreconditionerKind::Auto {
         let b_unordered = rhs.rhs(problem, &State::initial(problem), rhs.time_step(), None)?;
         let b: Vec<f64> = order.iter().map(|&o| b_unordered[o]).collect();
         let mut x = vec![0.0; b.len()];
@@ -220,7 +223,7 @@ fn ranks_system(
             Err(other) => return Err(other.into()),
         };
         if needs_amg {
-            ranks.set_preconditioner(DistributedPreconditioner::Gamg);
+            ranks.set_velocity_amg(problem, k, order)?;
         }
     }
     Ok((a, rhs, KrylovSolver::Ranks(ranks)))
@@ -331,6 +334,7 @@ impl KrylovSystem {
                 crate::la::mpi::DistributedPreconditioner::BlockJacobiIlu0
                 | crate::la::mpi::DistributedPreconditioner::BlockJacobiShell
                 | crate::la::mpi::DistributedPreconditioner::SchwarzShell => PreconditionerKind::Ilu,
+                crate::la::mpi::DistributedPreconditioner::SchwarzAmgShell => PreconditionerKind::Amg,
             };
         }
         if self.amg.is_some() {

@@ -80,8 +80,9 @@ pub struct KrylovParams {
     /// Run the solves on PETSc over the MPI ranks of the process's world (cargo feature `mpi`,
     /// `mpirun -n P`): every rank holds the problem and the iterates, each owns the rows of Ã
     /// of its part of the mesh; the preconditioner is then ILU(0) on each rank's block (`ilu`,
-    /// with the ranks' blocks overlapping by [`KrylovParams::overlap`]) or PETSc's GAMG
-    /// (`amg`), `auto` by the same probe (docs/distributed.md). Default: false.
+    /// with the ranks' blocks overlapping by [`KrylovParams::overlap`]) or those sweeps around
+    /// PETSc's GAMG on the velocity block (`amg`), `auto` by the same probe
+    /// (docs/distributed.md). Default: false.
     pub distributed: bool,
     /// In a distributed run with ILU(0): 0, block Jacobi (each rank's block its own rows and
     /// columns); 1, restricted additive Schwarz (each rank's block also holds the rows of other

@@ -15,8 +15,9 @@
 //! which PETSc keeps without a copy ([`DistributedMatrix::from_split`]) and, after each
 //! linearization, only the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs
 //! with restricted additive Schwarz (one overlapping block per rank: the rank's rows and those of
-//! other ranks that they read), block Jacobi (one block per rank, `solver.overlap = 0`) or
-//! GAMG, from the previous iterate as the serial solves do. Each rank's unknowns are numbered in
+//! other ranks that they read), block Jacobi (one block per rank, `solver.overlap = 0`), or
+//! either's sweeps around GAMG on the velocity block (the serial path's two-level method,
+//! [`RankKrylov::set_velocity_amg`]), from the previous iterate as the serial solves do. Each rank's unknowns are numbered in
 //! the system's order, so its block has its Γ_C rows last (then, with Schwarz, its overlap's
 //! rows) and its ILU(0) is the serial path's: single precision, refactored only from the first
 //! row a linearization changes ([`RankBlock`]). Of the solution each rank takes its own
@@ -51,6 +52,7 @@
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
 
+use super::amg::RankVelocityBlock;
 use crate::la::mpi::{
     Communicator, CsrParts, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, RowPattern,
 };
@@ -404,13 +406,17 @@ impl RankKrylov {
                 let factored = RankBlock::new(&block, first, value_of_entry)?;
                 (block.into_parts(), Some(Box::new(factored)))
             }
-            DistributedPreconditioner::SchwarzShell => {
+            DistributedPreconditioner::SchwarzShell | DistributedPreconditioner::SchwarzAmgShell => {
                 overlap = Some(Overlap::of(rows.owned.len(), &off_diagonal));
                 (diagonal, None)
             }
             _ => (diagonal, None),
         };
         let mut matrix = DistributedMatrix::from_split(&comm, diagonal, off_diagonal)?;
+        if params.preconditioner == DistributedPreconditioner::BlockJacobiShell {
+            // Block Jacobi is Schwarz without an overlap: the two-level method sweeps with it.
+            matrix.set_overlap(&[])?;
+        }
         if let Some(overlap) = overlap {
             let block_of = RankBlock::overlapped(&mut matrix, &rows, (&a, first_changing, first), overlap)?;
             block = Some(Box::new(block_of));
@@ -534,17 +540,39 @@ impl RankKrylov {
         solved
     }
 
+    /// Switches to the two-level method ([`DistributedPreconditioner::SchwarzAmgShell`]): GAMG
+    /// on the velocity block of the step matrix of step size k (its rows of this rank assembled
+    /// again from `problem`, the system's rows being the unknowns `order`), between sweeps with
+    /// this rank's block, overlapping or not; collective. For `amg`, and for `auto` where the
+    /// one-level sweeps need too many iterations.
+    pub(crate) fn set_velocity_amg(&mut self, problem: &Problem, k: f64, order: &[usize]) -> Result<(), LaError> {
+        if self.block.is_none() {
+            return Err(LaError::Petsc {
+                operation: "PCGAMG (velocity block)",
+                detail: "the two-level method sweeps with this crate's ILU(0) of each rank's block".into(),
+            });
+        }
+        let comm = Communicator::world()?;
+        let partition = problem.partition(&comm)?;
+        let (a, _) = crate::model::ordered_rows_at(problem, k, order, &self.rows.owned);
+        let block = RankVelocityBlock::new(
+            problem,
+            &a,
+            order,
+            &self.rows.owned,
+            (&partition.node_owner, comm.rank()),
+        )?;
+        drop(a);
+        let (ptr, col, val) = &block.rows;
+        self.matrix
+            .set_velocity_amg((ptr, col, val), problem.dim(), &block.modes, &block.slots)?;
+        self.params.preconditioner = DistributedPreconditioner::SchwarzAmgShell;
+        Ok(())
+    }
+
     /// The preconditioner PETSc runs.
     pub(crate) fn preconditioner(&self) -> DistributedPreconditioner {
         self.params.preconditioner
-    }
-
-    /// Switches the preconditioner (the `auto` probe's choice).
-    pub(crate) fn set_preconditioner(&mut self, preconditioner: DistributedPreconditioner) {
-        self.params.preconditioner = preconditioner;
-        if !preconditioner.is_shell() {
-            self.block = None;
-        }
     }
 
     /// Stored entries of Ã on this rank.
