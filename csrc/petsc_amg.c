@@ -101,6 +101,57 @@ void tc_amg_destroy(tc_amg *amg)
   free(amg);
 }
 
+/* GAMG as one V-cycle (KSPPREONLY) on the SPD matrix A, sequential or distributed, with the
+ * n_modes near-nullspace vectors `modes` (this process's entries of each, one after the other,
+ * orthonormal), options under `prefix`. The finest level's smoothing: `fine_smooth_its` steps
+ * (0: none, the caller smooths there; negative: PETSc's default), unless the option
+ * `smooth_option` says otherwise. Also the distributed two-level method's (csrc/petsc_mpi.c). */
+PetscErrorCode tc_gamg_on(Mat A, int n_modes, const double *modes, const char *prefix, const char *smooth_option,
+                          int fine_smooth_its, KSP *ksp)
+{
+  MatNullSpace nsp;
+  Vec          x, *vecs;
+  PetscInt     n;
+  PC           pc;
+  PetscFunctionBeginUser;
+  PetscCall(MatCreateVecs(A, &x, NULL));
+  PetscCall(VecGetLocalSize(x, &n));
+  PetscCall(VecDuplicateVecs(x, n_modes, &vecs));
+  for (int m = 0; m < n_modes; ++m) {
+    PetscScalar *v;
+    PetscCall(VecGetArrayWrite(vecs[m], &v));
+    memcpy(v, modes + (size_t)m * (size_t)n, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArrayWrite(vecs[m], &v));
+  }
+  PetscCall(MatNullSpaceCreate(PetscObjectComm((PetscObject)A), PETSC_FALSE, n_modes, vecs, &nsp));
+  PetscCall(MatSetNearNullSpace(A, nsp));
+  PetscCall(MatNullSpaceDestroy(&nsp));
+  PetscCall(VecDestroyVecs(n_modes, &vecs));
+  PetscCall(VecDestroy(&x));
+
+  PetscCall(KSPCreate(PetscObjectComm((PetscObject)A), ksp));
+  PetscCall(KSPSetOptionsPrefix(*ksp, prefix));
+  PetscCall(KSPSetOperators(*ksp, A, A));
+  PetscCall(KSPSetType(*ksp, KSPPREONLY));
+  PetscCall(KSPGetPC(*ksp, &pc));
+  PetscCall(PCSetType(pc, PCGAMG));
+  PetscCall(KSPSetFromOptions(*ksp));
+  PetscCall(KSPSetUp(*ksp));
+  {
+    PetscInt  levels, its = fine_smooth_its;
+    PetscBool set;
+    KSP       finest;
+    PetscCall(PetscOptionsGetInt(NULL, NULL, smooth_option, &its, &set));
+    PetscCall(PCMGGetLevels(pc, &levels));
+    if (levels > 1 && its >= 0) {
+      PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
+      if (its == 0) PetscCall(KSPSetType(finest, KSPRICHARDSON));
+      PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, its));
+    }
+  }
+  PetscFunctionReturn(0);
+}
+
 /* Sets up GAMG on the n × n CSR matrix (row_ptr, col, val; sorted columns; n a multiple of bs,
  * the unknowns of a node consecutive) with the n_modes near-nullspace vectors `modes` (n values
  * each, one after the other, orthonormal). The matrix uses the caller's arrays in place (no
@@ -108,9 +159,6 @@ void tc_amg_destroy(tc_amg *amg)
 static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, PetscInt *col, double *val,
                                int n_modes, const double *modes, int fine_smooth_its)
 {
-  MatNullSpace nsp;
-  Vec         *vecs;
-  PC           pc;
   PetscFunctionBeginUser;
   PetscCall(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_ptr, col, val, &amg->A));
   PetscCall(MatSetBlockSize(amg->A, bs));
@@ -120,40 +168,7 @@ static PetscErrorCode tc_setup(tc_amg *amg, int n, int bs, PetscInt *row_ptr, Pe
   PetscCall(VecCreateSeq(PETSC_COMM_SELF, n, &amg->x));
   PetscCall(VecSetBlockSize(amg->x, bs));
   PetscCall(VecDuplicate(amg->x, &amg->y));
-  PetscCall(VecDuplicateVecs(amg->x, n_modes, &vecs));
-  for (int m = 0; m < n_modes; ++m) {
-    PetscScalar *v;
-    PetscCall(VecGetArrayWrite(vecs[m], &v));
-    memcpy(v, modes + (size_t)m * (size_t)n, (size_t)n * sizeof(double));
-    PetscCall(VecRestoreArrayWrite(vecs[m], &v));
-  }
-  PetscCall(MatNullSpaceCreate(PETSC_COMM_SELF, PETSC_FALSE, n_modes, vecs, &nsp));
-  PetscCall(MatSetNearNullSpace(amg->A, nsp));
-  PetscCall(MatNullSpaceDestroy(&nsp));
-  PetscCall(VecDestroyVecs(n_modes, &vecs));
-
-  PetscCall(KSPCreate(PETSC_COMM_SELF, &amg->ksp));
-  PetscCall(KSPSetOptionsPrefix(amg->ksp, "tc_"));
-  PetscCall(KSPSetOperators(amg->ksp, amg->A, amg->A));
-  PetscCall(KSPSetType(amg->ksp, KSPPREONLY));
-  PetscCall(KSPGetPC(amg->ksp, &pc));
-  PetscCall(PCSetType(pc, PCGAMG));
-  PetscCall(KSPSetFromOptions(amg->ksp));
-  PetscCall(KSPSetUp(amg->ksp));
-  /* The finest level's smoothing: `fine_smooth_its` steps (0: none, the caller smooths there;
-   * negative: PETSc's default), unless -tc_amg_fine_smooth_its says otherwise. */
-  {
-    PetscInt  levels, its = fine_smooth_its;
-    PetscBool set;
-    KSP       finest;
-    PetscCall(PetscOptionsGetInt(NULL, "tc_", "-amg_fine_smooth_its", &its, &set));
-    PetscCall(PCMGGetLevels(pc, &levels));
-    if (levels > 1 && its >= 0) {
-      PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
-      if (its == 0) PetscCall(KSPSetType(finest, KSPRICHARDSON));
-      PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, its));
-    }
-  }
+  PetscCall(tc_gamg_on(amg->A, n_modes, modes, "tc_", "-tc_amg_fine_smooth_its", fine_smooth_its, &amg->ksp));
   PetscFunctionReturn(0);
 }
 

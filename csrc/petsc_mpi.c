@@ -15,7 +15,9 @@
 #include <stdint.h>
 #include <scotch/scotch.h>
 
-int tc_petsc_initialize(void);
+int            tc_petsc_initialize(void);
+PetscErrorCode tc_gamg_on(Mat A, int n_modes, const double *modes, const char *prefix, const char *smooth_option,
+                          int fine_smooth_its, KSP *ksp);
 
 static int tc_we_initialized_mpi = 0;
 
@@ -389,16 +391,14 @@ static PetscErrorCode tc_dist_two_level_apply(PC pc, Vec r, Vec z)
  * near-nullspace vectors (this rank's n_owned entries of each, one after the other), and the
  * slot of each of this rank's n_slots velocity rows of A (slot_row[e]: A's local row, slot[e]:
  * the block's local row). The finest level does no smoothing: the Schwarz sweeps are its
- * smoother (the serial path's rule). Collective. */
+ * smoother (the serial path's rule; options under -tc_dist_amg_, -tc_dist_amg_fine_smooth_its).
+ * Collective. */
 static PetscErrorCode tc_dist_velocity_amg_setup(tc_dist *dist, int n_owned, int bs, const int *row_ptr,
                                                  const int *col, const double *val, int n_modes,
                                                  const double *modes, int n_slots, const int *slot_row,
                                                  const int *slot)
 {
-  PetscInt    *i, *j, levels;
-  MatNullSpace nsp;
-  Vec         *vecs;
-  PC           pc;
+  PetscInt *i, *j;
   PetscFunctionBeginUser;
   PetscCall(PetscMalloc2(n_owned + 1, &i, row_ptr[n_owned], &j));
   for (int r = 0; r <= n_owned; ++r) i[r] = row_ptr[r];
@@ -411,32 +411,7 @@ static PetscErrorCode tc_dist_velocity_amg_setup(tc_dist *dist, int n_owned, int
   PetscCall(PetscFree2(i, j));
   PetscCall(MatSetOption(dist->velocity, MAT_SPD, PETSC_TRUE));
   PetscCall(MatCreateVecs(dist->velocity, &dist->coarse_in, &dist->coarse_out));
-  PetscCall(VecDuplicateVecs(dist->coarse_in, n_modes, &vecs));
-  for (int m = 0; m < n_modes; ++m) {
-    PetscScalar *v;
-    PetscCall(VecGetArrayWrite(vecs[m], &v));
-    memcpy(v, modes + (size_t)m * (size_t)n_owned, (size_t)n_owned * sizeof(double));
-    PetscCall(VecRestoreArrayWrite(vecs[m], &v));
-  }
-  PetscCall(MatNullSpaceCreate(PETSC_COMM_WORLD, PETSC_FALSE, n_modes, vecs, &nsp));
-  PetscCall(MatSetNearNullSpace(dist->velocity, nsp));
-  PetscCall(MatNullSpaceDestroy(&nsp));
-  PetscCall(VecDestroyVecs(n_modes, &vecs));
-  PetscCall(KSPCreate(PETSC_COMM_WORLD, &dist->amg));
-  PetscCall(KSPSetOptionsPrefix(dist->amg, "tc_dist_amg_"));
-  PetscCall(KSPSetOperators(dist->amg, dist->velocity, dist->velocity));
-  PetscCall(KSPSetType(dist->amg, KSPPREONLY));
-  PetscCall(KSPGetPC(dist->amg, &pc));
-  PetscCall(PCSetType(pc, PCGAMG));
-  PetscCall(KSPSetFromOptions(dist->amg));
-  PetscCall(KSPSetUp(dist->amg));
-  PetscCall(PCMGGetLevels(pc, &levels));
-  if (levels > 1) {
-    KSP finest;
-    PetscCall(PCMGGetSmoother(pc, levels - 1, &finest));
-    PetscCall(KSPSetType(finest, KSPRICHARDSON));
-    PetscCall(KSPSetTolerances(finest, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, 0));
-  }
+  PetscCall(tc_gamg_on(dist->velocity, n_modes, modes, "tc_dist_amg_", "-tc_dist_amg_fine_smooth_its", 0, &dist->amg));
   PetscCall(VecDuplicate(dist->x, &dist->residual));
   PetscCall(VecDuplicate(dist->x, &dist->sweep));
   PetscCall(PetscMalloc2(n_slots, &dist->slot_row, n_slots, &dist->slot));
