@@ -325,7 +325,8 @@ impl KrylovSystem {
     }
 
     /// The preconditioner set up: [`PreconditionerKind::Ilu`] or [`PreconditionerKind::Amg`]
-    /// (`auto` resolved; in a distributed run, ILU(0) on the ranks' blocks or PETSc's GAMG).
+    /// (`auto` resolved; in a distributed run, ILU(0) on the ranks' blocks, alone or around GAMG
+    /// on the velocity block).
     pub fn preconditioner(&self) -> PreconditionerKind {
         #[cfg(feature = "mpi")]
         if let KrylovSolver::Ranks(ranks) = &self.lock().1 {
