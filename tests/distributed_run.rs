@@ -353,23 +353,27 @@ mod distributed {
         agrees_over_ranks("brake_pad3d", &args);
     }
 
+    /// A run's `summary.json`.
+    fn summary_of(out: &Path) -> serde_json::Value {
+        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        serde_json::from_str(&text).unwrap()
+    }
+
     /// The preconditioner a run set up (`summary.json`).
     fn preconditioner(out: &Path) -> String {
-        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let summary = summary_of(out);
         summary["preconditioner"]
             .as_str()
-            .unwrap_or_else(|| panic!("{text}"))
+            .unwrap_or_else(|| panic!("{summary}"))
             .to_string()
     }
 
     /// The Krylov iterations of a run (`summary.json`).
     fn krylov_iterations(out: &Path) -> u64 {
-        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let summary = summary_of(out);
         summary["krylov_iterations"]
             .as_u64()
-            .unwrap_or_else(|| panic!("{text}"))
+            .unwrap_or_else(|| panic!("{summary}"))
     }
 
     /// On 3 ranks, block Jacobi (`solver.overlap = 0`) and restricted additive Schwarz (1, the

@@ -87,28 +87,11 @@ impl VelocityAmg {
         rows.iter().for_each(|&(i, q)| row_of[q as usize] = Some(i as usize));
 
         let mean_diagonal = rows.iter().map(|&(i, _)| a.diagonal(i as usize)).sum::<f64>() / rows.len().max(1) as f64;
-        let (mut row_ptr, mut col, mut val) = (Vec::with_capacity(n_padded + 1), Vec::new(), Vec::new());
-        row_ptr.push(0i32);
-        let mut entries: Vec<(u32, f64)> = Vec::new();
-        for (q, row) in row_of.iter().enumerate() {
-            entries.clear();
-            match row {
-                Some(i) => {
-                    let (cols, vals) = a.row(*i);
-                    entries.extend(
-                        (cols.iter().zip(vals))
-                            .filter(|(&c, _)| order[c as usize] < n_w)
-                            .map(|(&c, &v)| (padded[order[c as usize]], v)),
-                    );
-                    entries.sort_unstable_by_key(|e| e.0);
-                }
-                // A direction the node's constraints hold: an identity row of A's scale.
-                None => entries.push((q as u32, mean_diagonal)),
-            }
-            col.extend(entries.iter().map(|e| e.0 as i32));
-            val.extend(entries.iter().map(|e| e.1));
-            row_ptr.push(i32::try_from(col.len()).map_err(|_| too_large(col.len()))?);
-        }
+        let (ptr, col, val) = padded_rows(a, (order, n_w), &row_of, (0, mean_diagonal), |u| padded[u]);
+        let row_ptr = (ptr.iter().map(|&p| i32::try_from(p)))
+            .collect::<Result<Vec<i32>, _>>()
+            .map_err(|_| too_large(col.len()))?;
+        let col: Vec<i32> = col.into_iter().map(|c| c as i32).collect();
         let modes = rigid_body_modes(problem, &padded);
         // The ILU(0) sweeps are the finest level's smoother.
         let gamg = Gamg::new(row_ptr, col, val, d, &modes, FineSmoothing::None)?;
@@ -212,9 +195,10 @@ impl RankVelocityBlock {
                 next[o] - 1
             })
             .collect();
-        let global = |u: usize| -> Result<u32, Error> {
+        index32(d * node_owner.len())?;
+        let global = |u: usize| -> u32 {
             let q = padded[u] as usize;
-            index32(d * position[q / d] + q % d)
+            (d * position[q / d] + q % d) as u32
         };
         let first_slot = d * first_node[rank];
         let n_slots = d * (first_node[rank + 1] - first_node[rank]);
@@ -223,34 +207,14 @@ impl RankVelocityBlock {
         for (l, &i) in owned.iter().enumerate() {
             let u = order[i];
             if u < n_w {
-                let q = global(u)? as usize - first_slot;
+                let q = global(u) as usize - first_slot;
                 row_of_slot[q] = Some(i);
                 slots.push((index32(l)?, index32(q)?));
             }
         }
         let held: Vec<f64> = row_of_slot.iter().flatten().map(|&i| a.diagonal(i)).collect();
         let mean_diagonal = held.iter().sum::<f64>() / held.len().max(1) as f64;
-        let (mut ptr, mut col, mut val) = (vec![0], Vec::new(), Vec::new());
-        let mut entries: Vec<(u32, f64)> = Vec::new();
-        for (q, row) in row_of_slot.iter().enumerate() {
-            entries.clear();
-            match row {
-                Some(i) => {
-                    let (cols, vals) = a.row(*i);
-                    for (&c, &v) in cols.iter().zip(vals) {
-                        if order[c as usize] < n_w {
-                            entries.push((global(order[c as usize])?, v));
-                        }
-                    }
-                    entries.sort_unstable_by_key(|e| e.0);
-                }
-                // A direction the node's constraints hold: an identity row of A's scale.
-                None => entries.push((index32(first_slot + q)?, mean_diagonal)),
-            }
-            col.extend(entries.iter().map(|e| e.0));
-            val.extend(entries.iter().map(|e| e.1));
-            ptr.push(col.len());
-        }
+        let rows = padded_rows(a, (order, n_w), &row_of_slot, (first_slot, mean_diagonal), global);
         let own_nodes: Vec<usize> = (0..node_owner.len()).filter(|&p| node_owner[p] == rank).collect();
         let modes = rigid_body_modes(problem, &padded)
             .into_iter()
@@ -262,12 +226,43 @@ impl RankVelocityBlock {
                     .collect()
             })
             .collect();
-        Ok(RankVelocityBlock {
-            rows: (ptr, col, val),
-            modes,
-            slots,
-        })
+        Ok(RankVelocityBlock { rows, modes, slots })
     }
+}
+
+/// Rows of the padded velocity block: at slot `first_slot + q` the row `row_of_slot[q]` of `a`
+/// on its velocity columns (column c the unknown `order[c]`, a velocity below `n_w`, at slot
+/// `slot_of(order[c])`), ascending; where the slot has no row, a direction the node's
+/// constraints hold, an identity row of A's scale (`mean_diagonal`).
+fn padded_rows(
+    a: &CsrMatrix,
+    (order, n_w): (&[usize], usize),
+    row_of_slot: &[Option<usize>],
+    (first_slot, mean_diagonal): (usize, f64),
+    slot_of: impl Fn(usize) -> u32,
+) -> (Vec<usize>, Vec<u32>, Vec<f64>) {
+    let (mut ptr, mut col, mut val) = (Vec::with_capacity(row_of_slot.len() + 1), Vec::new(), Vec::new());
+    ptr.push(0);
+    let mut entries: Vec<(u32, f64)> = Vec::new();
+    for (q, row) in row_of_slot.iter().enumerate() {
+        entries.clear();
+        match row {
+            Some(i) => {
+                let (cols, vals) = a.row(*i);
+                entries.extend(
+                    (cols.iter().zip(vals))
+                        .filter(|(&c, _)| order[c as usize] < n_w)
+                        .map(|(&c, &v)| (slot_of(order[c as usize]), v)),
+                );
+                entries.sort_unstable_by_key(|e| e.0);
+            }
+            None => entries.push(((first_slot + q) as u32, mean_diagonal)),
+        }
+        col.extend(entries.iter().map(|e| e.0));
+        val.extend(entries.iter().map(|e| e.1));
+        ptr.push(col.len());
+    }
+    (ptr, col, val)
 }
 
 /// out = r − A z.
