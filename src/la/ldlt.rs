@@ -308,7 +308,11 @@ impl QuasiDefiniteLdlt {
     /// `from` (then it does after: L is lower triangular).
     pub fn forward(&self, y: &mut [f64], scratch: &mut [f64], from: usize) {
         let first = self.nodes.partition_point(|node| node.end <= from);
-        for node in &self.nodes[first..] {
+        let nodes = &self.nodes[first..];
+        for (k, node) in nodes.iter().enumerate() {
+            if let Some(ahead) = nodes.get(k + PREFETCH_AHEAD) {
+                prefetch(self.node_values(ahead));
+            }
             let (w, h, p) = (node.width(), node.height(), node.n_pattern);
             let skip = from.saturating_sub(node.begin);
             let values = &self.values[node.val..node.val + h * w];
@@ -360,7 +364,11 @@ impl QuasiDefiniteLdlt {
     /// the positions before `to` are left as they are.
     pub fn backward(&self, x: &mut [f64], scratch: &mut [f64], to: usize) {
         let first = self.nodes.partition_point(|node| node.end <= to);
-        for node in self.nodes[first..].iter().rev() {
+        let nodes = &self.nodes[first..];
+        for (k, node) in nodes.iter().enumerate().rev() {
+            if let Some(ahead) = k.checked_sub(PREFETCH_AHEAD).map(|a| &nodes[a]) {
+                prefetch(self.node_values(ahead));
+            }
             let (w, h, p) = (node.width(), node.height(), node.n_pattern);
             let skip = to.saturating_sub(node.begin);
             let values = &self.values[node.val..node.val + h * w];
@@ -389,6 +397,11 @@ impl QuasiDefiniteLdlt {
                 top[j] -= sum;
             }
         }
+    }
+
+    /// A supernode's values (its column-major block).
+    fn node_values(&self, node: &Supernode) -> &[f64] {
+        &self.values[node.val..node.val + node.height() * node.width()]
     }
 
     /// Columns of (L₂₂ D₂ L₂₂ᵀ)⁻¹, the trailing block of P S⁻¹ Pᵀ, for the given trailing
@@ -467,6 +480,26 @@ impl QuasiDefiniteLdlt {
             &self.rows[node.pattern..node.pattern + node.n_pattern],
         )
     }
+}
+
+/// How many supernodes ahead of the one being swept [`prefetch`] asks for: the 2D reference
+/// factor's (5 025 supernodes, most 4–16 columns wide) sweeps are shortest with 2–4.
+const PREFETCH_AHEAD: usize = 4;
+
+/// Asks the memory system for `values` ahead of their use, one request per 64-byte line. A
+/// hint only: it changes no result. A sweep walks the factor once, a supernode at a time, and
+/// most supernodes are a few kB, too short for the hardware's stream prefetcher to run ahead
+/// of the columns they read.
+#[inline]
+fn prefetch(values: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    for line in values.chunks(8) {
+        // SAFETY: a prefetch neither reads nor writes memory as far as the program can tell,
+        // and does not fault, whatever the address; this one is inside `values` besides.
+        unsafe { core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(line.as_ptr().cast()) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = values;
 }
 
 /// The four dot products c_q · v, q = 0…3 (the c_q as long as v), with two partial sums each
