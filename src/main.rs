@@ -245,6 +245,10 @@ impl FigureArgs {
 }
 
 fn main() -> ExitCode {
+    if let Err(message) = thermocontact::resources::check_instruction_set() {
+        eprintln!("error: {message}");
+        return ExitCode::FAILURE;
+    }
     let cli = Cli::parse();
     // Measured on 2 cores: faer's sequential kernels beat its rayon ones for these sizes.
     faer::set_global_parallelism(faer::Par::Seq);

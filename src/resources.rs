@@ -46,6 +46,33 @@ pub fn estimated_memory(dim: usize, unknowns: f64) -> f64 {
     32.0 * (1u64 << 20) as f64 + BYTES_PER_ENTRY * estimated_factor_entries(dim, unknowns)
 }
 
+/// Checks that this CPU has the instructions this build was compiled for, so that a binary
+/// built for x86-64-v3 (the repository's `.cargo/config.toml`: AVX2 and FMA) says what is
+/// missing on an older CPU instead of stopping with SIGILL at its first AVX2 instruction. The
+/// command line and the Python module call it first thing. Without AVX2 in the build there is
+/// nothing to check.
+pub fn check_instruction_set() -> Result<(), String> {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2", target_feature = "xsave"))]
+    {
+        use std::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
+        let leaf1 = __cpuid(1);
+        let has = |reg: u32, bit: u32| reg & (1 << bit) != 0;
+        let avx2 = __cpuid(0).eax >= 7 && has(__cpuid_count(7, 0).ebx, 5);
+        let (fma, osxsave, avx) = (has(leaf1.ecx, 12), has(leaf1.ecx, 27), has(leaf1.ecx, 28));
+        // SAFETY: XGETBV exists where CPUID reports OSXSAVE (checked first).
+        let ymm_saved = osxsave && unsafe { _xgetbv(0) } & 0b110 == 0b110;
+        if !(avx && avx2 && fma && ymm_saved) {
+            return Err(
+                "this build of thermocontact targets x86-64-v3 (AVX2 and FMA: the repository's \
+                        .cargo/config.toml), which this CPU or its operating system does not offer; \
+                        rebuild with RUSTFLAGS=\"-C target-cpu=native\" cargo build --release"
+                    .into(),
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The machine's memory (Linux: `MemTotal` of /proc/meminfo), bytes.
 pub fn machine_memory() -> Option<f64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;

@@ -37,6 +37,7 @@ mod _thermocontact {
 
     #[pymodule_init]
     fn init(module: &Bound<'_, PyModule>) -> PyResult<()> {
+        thermocontact::resources::check_instruction_set().map_err(pyo3::exceptions::PyImportError::new_err)?;
         // As the command line does: measured on 2 cores, faer's sequential kernels beat its
         // rayon ones at these sizes.
         faer::set_global_parallelism(faer::Par::Seq);
