@@ -44,6 +44,14 @@
 //! trailing block is easier to read but whose numeric factorization is 4–8× slower
 //! (docs/linear-algebra-study.md).
 //!
+//! **What a sweep costs.** On the 2D reference factor (5 025 supernodes, most 4–16 columns
+//! wide) a full sweep reads 5.3 M entries, 42 MB, which one core of this machine streams in
+//! 1.5 ms. The sweeps took 5.5–5.9 ms: bound not by memory but by 2-wide SSE2 arithmetic (the
+//! default x86-64 target) and by supernodes too short for the hardware's stream prefetcher.
+//! With [`prefetch`] of the supernode [`PREFETCH_AHEAD`] ahead and the repository's x86-64-v3
+//! build (AVX2: `.cargo/config.toml`) a sweep takes 2.0–3.5 ms, the results the same bits
+//! (docs/performance.md, "The instruction set and the sweeps' prefetch").
+//!
 //! **Rejected: L in single precision with iterative refinement.** A copy of L in f32 (D, the
 //! vectors and the sums in f64) swept by the same loops, refined against S in f64
 //! (x ← x + S̃⁻¹(J b − S x)). Measured on the 2D reference step matrix (49 344 unknowns, 6.2 M
