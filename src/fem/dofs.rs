@@ -92,6 +92,27 @@ impl VelocitySpace {
         self.first[node]..end
     }
 
+    /// (P Pᵀ v) at node p for a velocity v there (d components): the part of v that E^h keeps
+    /// at the node. P Pᵀ acts on each node's components alone, as the node's unknowns are its
+    /// own (`node_unknowns`): [`VelocitySpace::prolong`] of [`VelocitySpace::restrict_values`]
+    /// node by node, without vectors of the mesh's size.
+    pub fn node_projection(&self, node: usize, v: &[f64; 3]) -> [f64; 3] {
+        let unknowns = self.node_unknowns(node);
+        let mut reduced = [0.0; 3];
+        for c in 0..self.dim {
+            for &(j, a) in self.row(node * self.dim + c) {
+                reduced[j - unknowns.start] += a * v[c];
+            }
+        }
+        let mut kept = [0.0; 3];
+        for (c, kept) in kept.iter_mut().enumerate().take(self.dim) {
+            *kept = (self.row(node * self.dim + c).iter())
+                .map(|&(j, a)| a * reduced[j - unknowns.start])
+                .sum();
+        }
+        kept
+    }
+
     /// Number of full dofs d·N.
     pub fn n_full(&self) -> usize {
         self.ptr.len() - 1

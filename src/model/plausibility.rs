@@ -272,26 +272,13 @@ fn removed_gram(problem: &Problem, motions: &RigidMotions) -> Vec<Vec<f64>> {
     let mut gram = vec![vec![0.0; m]; m];
     let mut removed = vec![[0.0; 3]; m];
     let mut value = [0.0; 3];
-    // The node's unknowns and Pᵀ v on them (at most d).
-    let mut reduced: Vec<(usize, f64)> = Vec::with_capacity(3);
     for (p, x) in mesh.coords.iter().enumerate() {
         for (j, part) in removed.iter_mut().enumerate() {
             motions.at(j, x, &mut value);
             value.iter_mut().for_each(|v| *v *= motions.scale[j]);
-            reduced.clear();
+            let kept = space.node_projection(p, &value);
             for k in 0..d {
-                for &(unknown, a) in space.row(p * d + k) {
-                    match reduced.iter_mut().find(|(u, _)| *u == unknown) {
-                        Some((_, sum)) => *sum += a * value[k],
-                        None => reduced.push((unknown, a * value[k])),
-                    }
-                }
-            }
-            for k in 0..d {
-                let kept: f64 = (space.row(p * d + k).iter())
-                    .map(|&(unknown, a)| a * reduced.iter().find(|(u, _)| *u == unknown).map_or(0.0, |r| r.1))
-                    .sum();
-                part[k] = value[k] - kept;
+                part[k] = value[k] - kept[k];
             }
         }
         for i in 0..m {
