@@ -653,8 +653,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             }
             if size > 1 && root {
                 println!(
-                    "distributed over {size} ranks (PETSc + MPI): each rank owns the rows of its part of the mesh, \
-                     holds the matrices' columns they read and writes its piece of each frame into {}/; rank 0 the other files",
+                    "distributed over {size} ranks (PETSc + MPI): each rank owns the rows of its part of the mesh \
+                     and writes its piece of each frame into {}/; rank 0 the other files",
                     out.display()
                 );
             }

@@ -234,6 +234,70 @@ pub fn assemble_columns(
     }
 }
 
+/// 𝒦_A, 𝒦_B and G alone: what a process that keeps none of them assembles for the while it
+/// sums the step matrix's rows ([`assemble_stiffness_columns`]).
+#[derive(Debug, Clone)]
+pub struct StiffnessColumns {
+    /// 𝒦_A.
+    pub viscosity: CscMatrix,
+    /// 𝒦_B.
+    pub elasticity: CscMatrix,
+    /// G.
+    pub coupling: CscMatrix,
+}
+
+/// The columns of the nodes `kept` of 𝒦_A, 𝒦_B and G, the others empty: [`assemble_columns`]'
+/// columns of those matrices to the bit (the same sums, in the same order), without ℳ, ℳ_θ and
+/// 𝒦_θ. A rank of a distributed run keeps no stiffness between its step matrix's assemblies
+/// (`crate::model::ColumnShare`) and assembles them here each time it sums the rows of a step
+/// size's matrix.
+pub fn assemble_stiffness_columns(mesh: &Mesh, materials: &CellMaterials, kept: &[bool]) -> StiffnessColumns {
+    let d = mesh.dim;
+    let nodes_per_cell = mesh.nodes_per_cell();
+    let node_cells = NodeCells::new(mesh.n_nodes(), &mesh.cells, nodes_per_cell);
+    let graph = NodeGraph::from_node_cells(&node_cells, &mesh.cells, nodes_per_cell);
+    let vector = CscMatrix::from_graph_columns(&graph, d, d, Some(kept));
+    let coupling = CscMatrix::from_graph_columns(&graph, d, 1, Some(kept));
+    let mut mats = [vector.zeros_like(), vector, coupling];
+    let n_nodes = mesh.n_nodes();
+    let bounds: Vec<usize> = (0..n_nodes).step_by(NODES_PER_BLOCK).chain([n_nodes]).collect();
+    let cols_per_node = [d, d, 1];
+    let mut blocks: Vec<Vec<ColumnsMut>> = (1..bounds.len()).map(|_| Vec::with_capacity(3)).collect();
+    for (mat, &c) in mats.iter_mut().zip(&cols_per_node) {
+        for (block, columns) in blocks.iter_mut().zip(mat.split_columns_mut(&bounds, c)) {
+            block.push(columns);
+        }
+    }
+    blocks.into_par_iter().enumerate().for_each(|(b, mut m)| {
+        // The scalar matrices' columns of a node, summed and dropped.
+        let mut scalar = [Vec::new(), Vec::new(), Vec::new()];
+        for q in (bounds[b]..bounds[b + 1]).filter(|&q| kept[q]) {
+            let neighbours = graph.neighbours(q);
+            scalar.iter_mut().for_each(|v| v.resize(neighbours.len(), 0.0));
+            let [viscosity, elasticity, coupling] = &mut m[..] else {
+                unreachable!("three matrices")
+            };
+            let [mass, heat_mass, conduction] = &mut scalar;
+            let mut node: Vec<&mut [f64]> = vec![
+                mass,
+                viscosity.columns(q * d..(q + 1) * d),
+                elasticity.columns(q * d..(q + 1) * d),
+                coupling.columns(q..q + 1),
+                heat_mass,
+                conduction,
+            ];
+            node.iter_mut().for_each(|columns| columns.fill(0.0));
+            add_node_columns(mesh, materials, (neighbours, node_cells.of(q)), (q, true), &mut node);
+        }
+    });
+    let [viscosity, elasticity, coupling] = mats;
+    StiffnessColumns {
+        viscosity,
+        elasticity,
+        coupling,
+    }
+}
+
 /// Nodes per block of the assembly's sweep: a block's columns are summed by one thread, and
 /// many blocks balance the two cores of a shared machine.
 const NODES_PER_BLOCK: usize = 2048;

@@ -115,6 +115,86 @@ pub fn divergence_coupling_column(t: &Simplex, _b: usize) -> [f64; 12] {
     m
 }
 
+/// ∇v of the P1 field with nodal values `v[a]` on T: entry \[i\]\[j\] is ∂_j v_i (constant on T).
+pub fn gradient_of(t: &Simplex, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
+    let d = t.dim;
+    let mut grad = [[0.0; 3]; 3];
+    for (a, va) in v.iter().enumerate().take(d + 1) {
+        for i in 0..d {
+            for j in 0..d {
+                grad[i][j] += va[i] * t.grads[a][j];
+            }
+        }
+    }
+    grad
+}
+
+/// 𝒯ε(v) = λ tr ε(v) I + 2μ ε(v) of the P1 field with nodal values `v[a]`, constant on T.
+fn isotropic_stress(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
+    stress_of_gradient(t.dim, law, &gradient_of(t, v))
+}
+
+/// 𝒯ε = λ tr ε I + 2μ ε for the gradient `grad` (ε its symmetric part), in d dimensions.
+fn stress_of_gradient(d: usize, law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let trace: f64 = (0..d).map(|i| grad[i][i]).sum();
+    let mut stress = [[0.0; 3]; 3];
+    for i in 0..d {
+        for j in 0..d {
+            stress[i][j] = 0.5 * law.two_mu * (grad[i][j] + grad[j][i]);
+        }
+        stress[i][i] += law.lambda * trace;
+    }
+    stress
+}
+
+/// ∫_T 𝒯ε(v) : ε(λ_a e_i) at \[a\]\[i\]: the isotropic stiffness applied to the P1 field with nodal
+/// values `v[a]` ([`isotropic_stiffness_columns`] times v, without the 12 × 12 matrix): the
+/// matrix-free product of a process that keeps no stiffness matrix (`crate::model::ColumnShare`).
+pub fn isotropic_stiffness_product(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 4] {
+    let d = t.dim;
+    let stress = isotropic_stress(t, law, v);
+    let mut out = [[0.0; 3]; 4];
+    for (a, row) in out.iter_mut().enumerate().take(d + 1) {
+        for (i, value) in row.iter_mut().enumerate().take(d) {
+            *value = t.measure * (0..d).map(|j| stress[i][j] * t.grads[a][j]).sum::<f64>();
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+/// ∫_T 𝒯ε(x) : ε(y) for the P1 fields with nodal values `x[a]`, `y[a]`: xᵀ K_T y for the
+/// isotropic stiffness K_T.
+pub fn isotropic_energy(t: &Simplex, law: Isotropic, x: &[[f64; 3]; 4], y: &[[f64; 3]; 4]) -> f64 {
+    t.measure * isotropic_energy_density(t.dim, law, &gradient_of(t, x), &gradient_of(t, y))
+}
+
+/// 𝒯ε(x) : ε(y) for the gradients ∇x, ∇y ([`gradient_of`]) in d dimensions: the integrand of
+/// ∫_T 𝒯ε(x) : ε(y) = xᵀ K_T y, for a caller that takes each field's gradient once for several forms.
+pub fn isotropic_energy_density(d: usize, law: Isotropic, grad_x: &[[f64; 3]; 3], grad_y: &[[f64; 3]; 3]) -> f64 {
+    let stress = stress_of_gradient(d, law, grad_x);
+    let mut sum = 0.0;
+    for i in 0..d {
+        for j in 0..d {
+            sum += stress[i][j] * 0.5 * (grad_y[i][j] + grad_y[j][i]);
+        }
+    }
+    sum
+}
+
+/// ∫_T div v for the P1 field with nodal values `v[a]`: times c / (d + 1), each of T's entries of
+/// Gᵀv ([`divergence_coupling`]'s columns are all the same).
+pub fn divergence_integral(t: &Simplex, v: &[[f64; 3]; 4]) -> f64 {
+    let d = t.dim;
+    let mut div = 0.0;
+    for (a, va) in v.iter().enumerate().take(d + 1) {
+        for i in 0..d {
+            div += va[i] * t.grads[a][i];
+        }
+    }
+    t.measure * div
+}
+
 /// ∫_T ε(v) : ε(v) for the P1 field with nodal values `v[a]` (components beyond d unused): ε is
 /// constant on T, ε_ij = ½ Σ_a (v_a,i ∂_j λ_a + v_a,j ∂_i λ_a).
 pub fn strain_squared(t: &Simplex, v: &[[f64; 3]; 4]) -> f64 {
@@ -185,6 +265,48 @@ mod tests {
             assert!(row.iter().sum::<f64>().abs() < 1e-15);
         }
         assert!((l[0][0] - 1.0).abs() < 1e-15);
+    }
+
+    /// Nodal values of a P1 vector field on a simplex.
+    type Field = [[f64; 3]; 4];
+
+    /// Two rough P1 fields on a tetrahedron and on a triangle.
+    fn rough_fields() -> Vec<(Simplex, Field, Field)> {
+        let tet = Simplex::new(3, &[[0.1, 0.0, 0.2], [1.3, 0.1, 0.0], [0.2, 0.9, 0.1], [0.3, 0.2, 1.1]]);
+        let x = [[0.3, -1.2, 0.5], [0.8, 0.1, -0.4], [-0.6, 0.7, 0.9], [0.2, -0.3, 1.5]];
+        let y = [[-0.7, 0.4, 0.2], [0.5, 1.1, -0.9], [0.3, -0.2, 0.6], [1.4, 0.8, -0.1]];
+        let planar = |v: [[f64; 3]; 4]| v.map(|[a, b, _]| [a, b, 0.0]);
+        let tri = Simplex::new(2, &[[0.0, 0.1, 0.0], [1.2, 0.0, 0.0], [0.3, 0.8, 0.0]]);
+        vec![(tet, x, y), (tri, planar(x), planar(y))]
+    }
+
+    /// The matrix-free kernels are the assembled stiffness and coupling applied to the field
+    /// (to rounding): K_T v, xᵀ K_T y and Σ_b (Gᵀ v)_b.
+    #[test]
+    fn matrix_free_kernels_apply_the_local_matrices() {
+        let law = Isotropic {
+            lambda: 1.7,
+            two_mu: 0.9,
+        };
+        for (t, x, y) in rough_fields() {
+            let d = t.dim;
+            let k = isotropic_stiffness(&t, law);
+            let flat = |v: &Field| -> Vec<f64> { (0..=d).flat_map(|a| v[a][..d].to_vec()).collect() };
+            let (xf, yf) = (flat(&x), flat(&y));
+            let product = isotropic_stiffness_product(&t, law, &y);
+            let mut energy = 0.0;
+            for (r, row) in k.iter().enumerate().take((d + 1) * d) {
+                let ky: f64 = (0..(d + 1) * d).map(|c| row[c] * yf[c]).sum();
+                assert!((product[r / d][r % d] - ky).abs() <= 1e-14, "d = {d}, row {r}");
+                energy += xf[r] * ky;
+            }
+            assert!((isotropic_energy(&t, law, &x, &y) - energy).abs() <= 1e-14 * energy.abs().max(1.0));
+            let g = divergence_coupling(&t);
+            let gtv: f64 = (0..=d)
+                .map(|b| (0..(d + 1) * d).map(|r| g[r][b] * xf[r]).sum::<f64>())
+                .sum();
+            assert!((divergence_integral(&t, &x) - gtv).abs() <= 1e-14, "d = {d}");
+        }
     }
 
     #[test]

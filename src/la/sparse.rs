@@ -140,6 +140,17 @@ impl CscMatrix {
         }
     }
 
+    /// An n_rows × n_cols matrix with no stored entry.
+    pub fn empty(n_rows: usize, n_cols: usize) -> Self {
+        CscMatrix {
+            n_rows,
+            n_cols,
+            col_ptr: vec![0; n_cols + 1].into(),
+            row_idx: Vec::new().into(),
+            values: Vec::new(),
+        }
+    }
+
     /// Number of stored entries.
     pub fn nnz(&self) -> usize {
         self.values.len()

@@ -229,8 +229,11 @@ pub fn energy_levels(problem: &Problem, state: &State) -> Result<(f64, f64, f64)
     let elastic = match &problem.columns {
         None => mats.elasticity.quadratic_form(&state.u),
         Some(share) => {
-            let b = &mats.elasticity;
-            let mut part = column_forms(b, Some(share), None, [(&b.values[..], &state.u)], [(0, &state.u)]);
+            let mut part = share.stiffness_forms(
+                (&problem.mesh, &problem.materials),
+                [&state.u],
+                [(|m| m.elasticity, 0, 0)],
+            );
             share.sum(&mut part)?;
             part[0]
         }
@@ -255,11 +258,20 @@ pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result
     let share = problem.columns.as_ref();
     let dw: Vec<f64> = w.iter().zip(&previous.w).map(|(a, b)| a - b).collect();
     let du: Vec<f64> = u.iter().zip(&previous.u).map(|(a, b)| a - b).collect();
-    let mut forms = mechanical_forms(&problem.matrices, share, w, &dw, u, &du);
+    let mut forms = match share {
+        None => mechanical_forms(&problem.matrices, w, &dw, u, &du),
+        Some(share) => shared_mechanical_forms(problem, share, w, &dw, u, &du),
+    };
     let force = problem.force(state.t)?;
     // Gᵀw, whose rows the heat balance needs too: k wᵀGθ = k θ·(Gᵀw).
-    let mut coupling = vec![0.0; state.theta.len()];
-    problem.matrices.coupling.mul_transpose_add(1.0, w, &mut coupling);
+    let coupling = match share {
+        None => {
+            let mut coupling = vec![0.0; state.theta.len()];
+            problem.matrices.coupling.mul_transpose_add(1.0, w, &mut coupling);
+            coupling
+        }
+        Some(share) => share.coupling_transpose((&problem.mesh, &problem.materials), w),
+    };
 
     let mut e = StepEnergy {
         thermal_stress: k * owned_dot(share, 1, &state.theta, &coupling),
@@ -396,15 +408,8 @@ impl MechanicalForms {
 /// Measured on the 2D reference run's matrices (256 × 64 cells; release, a loaded machine, the
 /// fastest of 200 calls): all of [`step_energy`] 2.7 ms on two threads, 3.4 ms on one, where one
 /// mat-vec with ℳ takes 0.36 ms and one with 𝒦_B 0.37–0.72 ms (the ten mat-vecs this
-/// replaces: ≈ 3.3 ms and more). With a `share`, the columns of the nodes it owns only.
-fn mechanical_forms(
-    mats: &Matrices,
-    share: Option<&ColumnShare>,
-    w: &[f64],
-    dw: &[f64],
-    u: &[f64],
-    du: &[f64],
-) -> MechanicalForms {
+/// replaces: ≈ 3.3 ms and more).
+fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64]) -> MechanicalForms {
     let (m, a, b) = (&mats.mass, &mats.viscosity, &mats.elasticity);
     let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = if same_pattern(a, b)
     {
@@ -412,29 +417,55 @@ fn mechanical_forms(
         let mass = (m, [w, dw]);
         column_forms(
             a,
-            share,
             Some(mass),
             gathers,
             [(0, w), (0, dw), (1, dw), (2, w), (3, u), (3, du), (4, du)],
         )
     } else {
         let (mw, mdw) = (m.mul(w), m.mul(dw));
-        let d = m.dim;
-        let [mw, mdw, dmd] = [
-            owned_dot(share, d, &mw, w),
-            owned_dot(share, d, &mdw, w),
-            owned_dot(share, d, &mdw, dw),
-        ];
-        let [aw] = column_forms(a, share, None, [(&a.values[..], w)], [(0, w)]);
+        let [mw, mdw, dmd] = [dot(&mw, w), dot(&mdw, w), dot(&mdw, dw)];
+        let [aw] = column_forms(a, None, [(&a.values[..], w)], [(0, w)]);
         let [bu, bdu, dbd] = column_forms(
             b,
-            share,
             None,
             [(&b.values[..], u), (&b.values, du)],
             [(0, u), (0, du), (1, du)],
         );
         [mw, mdw, dmd, aw, bu, bdu, dbd]
     };
+    MechanicalForms {
+        w_mass_w,
+        w_mass_dw,
+        dw_mass_dw,
+        w_viscous_w,
+        u_elastic_u,
+        u_elastic_du,
+        du_elastic_du,
+    }
+}
+
+/// [`mechanical_forms`]' parts on a process that keeps no stiffness matrix ([`ColumnShare`]):
+/// ℳ's forms over the entries of its own nodes (ℳ is whole on every process), 𝒦_A's and 𝒦_B's
+/// over the cells it owns, from the kernels ([`ColumnShare::stiffness_forms`]).
+fn shared_mechanical_forms(
+    problem: &Problem,
+    share: &ColumnShare,
+    w: &[f64],
+    dw: &[f64],
+    u: &[f64],
+    du: &[f64],
+) -> MechanicalForms {
+    let [w_mass_w, w_mass_dw, dw_mass_dw] = share.mass_forms(&problem.matrices.mass, [w, dw], [(0, 0), (0, 1), (1, 1)]);
+    let [w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = share.stiffness_forms(
+        (&problem.mesh, &problem.materials),
+        [w, u, du],
+        [
+            (|m| m.viscosity, 0, 0),
+            (|m| m.elasticity, 1, 1),
+            (|m| m.elasticity, 1, 2),
+            (|m| m.elasticity, 2, 2),
+        ],
+    );
     MechanicalForms {
         w_mass_w,
         w_mass_dw,
@@ -461,11 +492,9 @@ type MassGathers<'a> = (&'a VectorMass, [&'a [f64]; 2]);
 /// x_fᵀ A_gᵀ y_g = y_gᵀ A_g x_f, each column's gathers (A_gᵀ y_g)_c read once for all its forms.
 /// The gathers are ℳ's with `mass` = (ℳ, [y_0, y_1]) (g = 0, 1: ℳ's entries read through the
 /// vector pattern, [`VectorMass::column`]), then `stored[g]` = (values of A_g, y_g) on
-/// the pattern. Blocks of columns in parallel; with a `share`, the columns of its own nodes
-/// only (the pattern's columns per node: its columns over the nodes).
+/// the pattern. Blocks of columns in parallel.
 fn column_forms<const G: usize, const F: usize>(
     pattern: &CscMatrix,
-    share: Option<&ColumnShare>,
     mass: Option<MassGathers>,
     stored: [(&[f64], &[f64]); G],
     forms: [(usize, &[f64]); F],
@@ -473,13 +502,11 @@ fn column_forms<const G: usize, const F: usize>(
     let n = pattern.n_cols;
     let (col_ptr, row_idx) = (&pattern.col_ptr[..], &pattern.row_idx[..]);
     let first_stored = if mass.is_some() { 2 } else { 0 };
-    let per_node = share.map_or(1, |share| n / share.n_nodes());
-    let counted = |c: usize| share.is_none_or(|share| share.owns(c / per_node));
     // The sums of a column sit side by side in 8 slots: ℳ's two and the stored matrices'.
     const { assert!(G + 2 <= 8, "at most six gathers beside ℳ's") };
     let block = |first: usize| {
         let mut sums = [0.0; F];
-        for c in (first..(first + BLOCK).min(n)).filter(|&c| counted(c)) {
+        for c in first..(first + BLOCK).min(n) {
             // The sums side by side: independent chains of multiply-adds (one sum after the
             // other waits on each add, and was slower than the separate mat-vecs).
             let mut column = [0.0; 8];
@@ -558,7 +585,7 @@ mod tests {
                 .collect()
         };
         let (w, dw, u, du) = (rough(1, n), rough(2, n), rough(3, n), rough(4, n));
-        let f = mechanical_forms(mats, None, &w, &dw, &u, &du);
+        let f = mechanical_forms(mats, &w, &dw, &u, &du);
         let close = |a: f64, b: f64| assert!((a - b).abs() <= 1e-13 * b.abs().max(1e-300), "{a} against {b}");
         close(f.w_mass_w, mats.mass.quadratic_form(&w));
         close(f.w_mass_dw, dot(&w, &mats.mass.mul(&dw)));

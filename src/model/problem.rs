@@ -193,9 +193,10 @@ pub struct Problem {
     /// ([`Problem::partition`]).
     #[cfg(feature = "mpi")]
     partition: std::sync::OnceLock<crate::partition::MeshPartition>,
-    /// This process's share of 𝒦_A, 𝒦_B and G (the columns its rows read) where it holds
-    /// part of them, as a rank of a distributed run does (`ProblemBuilder::on_ranks`, feature `mpi`);
-    /// `None`: the whole matrices.
+    /// This process's share of 𝒦_A, 𝒦_B and G (the columns its rows read, assembled only while
+    /// its step matrix is summed; its products and energies over its cells) where it keeps
+    /// none of them, as a rank of a distributed run does (`ProblemBuilder::on_ranks`, feature
+    /// `mpi`; [`Problem::matrices`] then holds them empty); `None`: the whole matrices.
     pub columns: Option<ColumnShare>,
 }
 
@@ -302,9 +303,10 @@ impl ProblemBuilder {
 
     /// This rank's share of the matrices in a distributed run over `comm` (more than one rank):
     /// the mesh is partitioned at the start of [`ProblemBuilder::build`] (collective; the
-    /// partition kept as [`Problem::partition`]'s), and of 𝒦_A, 𝒦_B and G only the columns the
-    /// rank's rows read are assembled ([`ColumnShare`]); the energies' parts are summed over
-    /// the ranks. One rank: the whole problem.
+    /// partition kept as [`Problem::partition`]'s), and 𝒦_A, 𝒦_B and G are not kept: their
+    /// columns the rank's rows read are assembled while its step matrix is summed, its
+    /// products and energies are sums over its cells ([`ColumnShare`]); the energies' parts are
+    /// summed over the ranks. One rank: the whole problem.
     #[cfg(feature = "mpi")]
     pub fn on_ranks(mut self, comm: crate::la::mpi::Communicator) -> Self {
         self.share = (comm.size() > 1).then_some(ShareOf::Rank(comm));
@@ -615,8 +617,25 @@ impl ProblemBuilder {
                 Some(share.over_ranks(comm))
             }
         };
-        let kept = columns.as_ref().map(ColumnShare::kept);
-        let mut matrices = assembly::assemble_columns(&mesh, &materials, (&parts.contact, k_e), kept);
+        // A share keeps none of 𝒦_A, 𝒦_B and G ([`ColumnShare`]): of them the build assembles only
+        // the columns the contact pressure's rows read (Γ_C's nodes and their neighbours), where
+        // a law scales with the pressure.
+        let with_pressure = self.friction.iter().any(|f| f.3 == NormalForce::Reaction);
+        let pressure_columns = columns.as_ref().map(|_| {
+            let on_contact = mesh.nodes_on(&parts.contact);
+            let mut kept = vec![false; mesh.n_nodes()];
+            if with_pressure {
+                for e in 0..mesh.n_cells() {
+                    let nodes = mesh.cell(e);
+                    if nodes.iter().any(|&p| on_contact[p]) {
+                        nodes.iter().for_each(|&p| kept[p] = true);
+                    }
+                }
+            }
+            kept
+        });
+        let mut matrices =
+            assembly::assemble_columns(&mesh, &materials, (&parts.contact, k_e), pressure_columns.as_deref());
         thermal.boundary.add_convection(&mesh, &mut matrices.conduction);
         let contact_weights = assembly::boundary_weights(&mesh, &parts.contact);
         let contact: Vec<ContactNode> = frames
@@ -672,7 +691,7 @@ impl ProblemBuilder {
         if let Some(boundary_load) = &thermal.constant_load {
             exchange_load.iter_mut().zip(boundary_load).for_each(|(e, b)| *e += b);
         }
-        let reference_load = match materials.uniform_material() {
+        let reference_load = match materials.uniform_material().filter(|_| columns.is_none()) {
             // One material: G carries its c, and θ_ref G 1 is one product (the bits of before).
             Some(uniform) => {
                 let mut load = vec![0.0; mesh.n_nodes() * d];
@@ -686,6 +705,18 @@ impl ProblemBuilder {
             }
             None => assembly::reference_load(&mesh, &materials),
         };
+        if columns.is_some() {
+            // A share keeps none of 𝒦_A, 𝒦_B and G past the pressure's rows: its step matrices
+            // assemble the columns they read for the while (`step_matrix`), its right-hand sides
+            // and energies are summed over its cells ([`ColumnShare`]).
+            for m in [
+                &mut matrices.viscosity,
+                &mut matrices.elasticity,
+                &mut matrices.coupling,
+            ] {
+                *m = crate::la::CscMatrix::empty(m.n_rows, m.n_cols);
+            }
+        }
 
         let initial = match self.initial_fields {
             None => {

@@ -239,6 +239,8 @@ const ROWS_PER_BLOCK: usize = 4096;
 /// G by rows and the place of each unknown in the ordering.
 struct ColumnSource<'p> {
     problem: &'p Problem,
+    /// 𝒦_A, 𝒦_B and G.
+    stiffness: Stiffness<'p>,
     k: f64,
     lift: Vec<f64>,
     moving_lift: Vec<(usize, usize, f64)>,
@@ -261,6 +263,37 @@ struct ColumnSource<'p> {
     /// memory at 10⁶ unknowns.)
     mirror: Vec<u32>,
     position: Vec<usize>,
+}
+
+/// 𝒦_A, 𝒦_B and G as a [`ColumnSource`] reads them: the problem's, or, where the problem keeps
+/// none (a rank of a distributed run: [`super::ColumnShare`]), the columns its rows read,
+/// assembled for the sum and dropped with it (the same bits as the whole problem's columns).
+enum Stiffness<'p> {
+    Problem(&'p crate::fem::assembly::Matrices),
+    Assembled(Box<crate::fem::assembly::StiffnessColumns>),
+}
+
+impl Stiffness<'_> {
+    fn viscosity(&self) -> &CscMatrix {
+        match self {
+            Stiffness::Problem(m) => &m.viscosity,
+            Stiffness::Assembled(m) => &m.viscosity,
+        }
+    }
+
+    fn elasticity(&self) -> &CscMatrix {
+        match self {
+            Stiffness::Problem(m) => &m.elasticity,
+            Stiffness::Assembled(m) => &m.elasticity,
+        }
+    }
+
+    fn coupling(&self) -> &CscMatrix {
+        match self {
+            Stiffness::Problem(m) => &m.coupling,
+            Stiffness::Assembled(m) => &m.coupling,
+        }
+    }
 }
 
 /// The column being summed: its values by position, which positions it has (an entry that
@@ -297,7 +330,15 @@ impl<'p> ColumnSource<'p> {
         let n = n_w + temp.n_free;
         assert_eq!(order.len(), n, "an ordering of every unknown");
         let mats = &problem.matrices;
-        let (coupling, heat_mass) = (&mats.coupling, &mats.heat_mass);
+        let stiffness = match &problem.columns {
+            None => Stiffness::Problem(mats),
+            Some(share) => Stiffness::Assembled(Box::new(crate::fem::assembly::assemble_stiffness_columns(
+                &problem.mesh,
+                &problem.materials,
+                share.kept(),
+            ))),
+        };
+        let (coupling, heat_mass) = (stiffness.coupling(), &mats.heat_mass);
 
         // The θ_D lift: the columns of prescribed temperatures, moved to the right-hand side
         // (kept as entries where θ_D depends on t).
@@ -356,6 +397,7 @@ impl<'p> ColumnSource<'p> {
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
         ColumnSource {
             problem,
+            stiffness,
             k,
             lift,
             moving_lift,
@@ -432,8 +474,7 @@ impl<'p> ColumnSource<'p> {
     /// neighbours of p: entry (p, j) of G's column q lies at place k·d + j of that column, k
     /// the place of p among q's neighbours, which the mirror of (q in p's column) gives.
     fn coupling_row(&self, f: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let mats = &self.problem.matrices;
-        let (coupling, graph) = (&mats.coupling, &mats.heat_mass);
+        let (coupling, graph) = (self.stiffness.coupling(), &self.problem.matrices.heat_mass);
         let d = self.problem.velocity.dim;
         let (p, j) = (f / d, f % d);
         (graph.col_ptr[p]..graph.col_ptr[p + 1]).map(move |t| {
@@ -449,18 +490,17 @@ impl<'p> ColumnSource<'p> {
     fn scatter(&self, c: usize, mut add: impl FnMut(usize, f64)) {
         let (vel, temp) = (&self.problem.velocity, &self.problem.temperature);
         let mats = &self.problem.matrices;
-        let (mass, coupling, heat_mass) = (&mats.mass, &mats.coupling, &mats.heat_mass);
+        let (mass, coupling, heat_mass) = (&mats.mass, self.stiffness.coupling(), &mats.heat_mass);
+        let (viscosity, elasticity) = (self.stiffness.viscosity(), self.stiffness.elasticity());
         // ℳ, 𝒦_A and 𝒦_B on 𝒦_A's (vector) pattern, ℳ's entries read through it.
-        let vector = &mats.viscosity;
+        let vector = viscosity;
         let (k, n_w, position) = (self.k, vel.n_free, &self.position);
         if c < n_w {
             // Velocity column c: (ℳ/k + 𝒦_A + k𝒦_B) Pᵀ and the Gᵀ of the temperature rows.
             for &(f, b) in &self.full_entries[self.full_ptr[c]..self.full_ptr[c + 1]] {
                 let (start, mass_column) = (vector.col_ptr[f], mass.column(f));
                 for idx in start..vector.col_ptr[f + 1] {
-                    let value = mass_column.entry(idx - start) / k
-                        + mats.viscosity.values[idx]
-                        + k * mats.elasticity.values[idx];
+                    let value = mass_column.entry(idx - start) / k + viscosity.values[idx] + k * elasticity.values[idx];
                     for &(r, a) in vel.row(vector.row_idx[idx] as usize) {
                         add(position[r], a * b * value);
                     }
@@ -529,7 +569,16 @@ impl StepRhs {
         let mats = &problem.matrices;
         let mut mech = problem.force(t)?;
         mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
-        mats.elasticity.mul_add(-1.0, &previous.u, &mut mech);
+        match &problem.columns {
+            None => mats.elasticity.mul_add(-1.0, &previous.u, &mut mech),
+            Some(share) => share.stiffness_mul_add(
+                (&problem.mesh, &problem.materials),
+                |m| m.elasticity,
+                -1.0,
+                &previous.u,
+                &mut mech,
+            ),
+        }
         let mut heat = problem.heat_load(t, exchange_at.unwrap_or(&previous.theta))?;
         mats.heat_mass.mul_add(1.0 / self.k, &previous.theta, &mut heat);
 

@@ -309,6 +309,10 @@ impl LinearKind {
     /// | strip 40 × 2.5 (512 × 4) | 2 | 6 652 | 512 | 2.5 | 2.2 | 72 / 17 |
     /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 477 | 85 | 910 / 51 |
     ///
+    /// (Measured again on 2026-11-28 with the x86-64-v3 build on an idle machine, every run
+    /// 4–45× faster: the rule takes the faster path on every body but the 3D example at 17.6k,
+    /// 0.69 s direct against 0.49 s, and the constants estimate 6–28× today's seconds;
+    /// docs/solvers.md.)
     /// φ, α, ν, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
     /// bodies, β N 1.2–2.2 µs per unknown). The load slows the iterative path (memory-bound)
     /// more than the direct one (at 47k, 0.63 s per step here against 0.04–0.06 s on the idle
