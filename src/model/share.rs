@@ -117,7 +117,7 @@ impl ColumnShare {
 
     /// y += α 𝒦 x in the rows of this process's own and Γ_C's nodes (full nodal dofs; the other
     /// rows get partial sums), 𝒦 the viscous (`Law::Viscosity`) or elastic stiffness, summed
-    /// cell by cell from the kernels ([`kernels::isotropic_stiffness_product`]): the rows of the
+    /// cell by cell from the kernels (`fem::kernels::isotropic_stiffness_product`): the rows of the
     /// assembled product, to rounding, without the matrix.
     pub fn stiffness_mul_add(
         &self,
@@ -141,7 +141,7 @@ impl ColumnShare {
 
     /// Gᵀw at the nodes of this process's own and Γ_C's nodes (the others partial), summed
     /// cell by cell: each of a cell's nodes gets c ∫_T div w / (d + 1)
-    /// ([`kernels::divergence_integral`]).
+    /// (`fem::kernels::divergence_integral`).
     pub fn coupling_transpose(&self, (mesh, materials): (&Mesh, &CellMaterials), w: &[f64]) -> Vec<f64> {
         let d = mesh.dim;
         let mut out = vec![0.0; mesh.n_nodes()];
@@ -156,8 +156,8 @@ impl ColumnShare {
 
     /// This process's part of the forms x_aᵀ 𝒦 x_b of `forms` (law, a, b) over the vector fields
     /// `fields` (full nodal vectors), 𝒦 the stiffness of the law: the sums over the cells it
-    /// owns ([`ColumnShare::owns_cell`]) of ∫_T 𝒯ε(x_a) : ε(x_b)
-    /// ([`kernels::isotropic_energy_density`], each field's gradient taken once a cell), to be
+    /// owns (the owner of a cell's lowest node sums it) of ∫_T 𝒯ε(x_a) : ε(x_b)
+    /// (`fem::kernels::isotropic_energy_density`, each field's gradient taken once a cell), to be
     /// summed over the ranks ([`ColumnShare::sum`]).
     pub fn stiffness_forms<const N: usize, const F: usize>(
         &self,
