@@ -388,6 +388,23 @@ struct MechanicalForms {
     du_elastic_du: f64,
 }
 
+impl From<[f64; 7]> for MechanicalForms {
+    /// The seven forms in the order of [`MechanicalForms::values_mut`].
+    fn from(
+        [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du]: [f64; 7],
+    ) -> Self {
+        MechanicalForms {
+            w_mass_w,
+            w_mass_dw,
+            dw_mass_dw,
+            w_viscous_w,
+            u_elastic_u,
+            u_elastic_du,
+            du_elastic_du,
+        }
+    }
+}
+
 impl MechanicalForms {
     /// The seven forms in their order, to be summed over the ranks.
     fn values_mut(&mut self) -> [&mut f64; 7] {
@@ -411,8 +428,7 @@ impl MechanicalForms {
 /// replaces: ≈ 3.3 ms and more).
 fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64]) -> MechanicalForms {
     let (m, a, b) = (&mats.mass, &mats.viscosity, &mats.elasticity);
-    let [w_mass_w, w_mass_dw, dw_mass_dw, w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = if same_pattern(a, b)
-    {
+    let forms = if same_pattern(a, b) {
         let gathers = [(&a.values[..], w), (&b.values, u), (&b.values, du)];
         let mass = (m, [w, dw]);
         column_forms(
@@ -433,15 +449,7 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
         );
         [mw, mdw, dmd, aw, bu, bdu, dbd]
     };
-    MechanicalForms {
-        w_mass_w,
-        w_mass_dw,
-        dw_mass_dw,
-        w_viscous_w,
-        u_elastic_u,
-        u_elastic_du,
-        du_elastic_du,
-    }
+    MechanicalForms::from(forms)
 }
 
 /// [`mechanical_forms`]' parts on a process that keeps no stiffness matrix ([`ColumnShare`]):
@@ -455,8 +463,8 @@ fn shared_mechanical_forms(
     u: &[f64],
     du: &[f64],
 ) -> MechanicalForms {
-    let [w_mass_w, w_mass_dw, dw_mass_dw] = share.mass_forms(&problem.matrices.mass, [w, dw], [(0, 0), (0, 1), (1, 1)]);
-    let [w_viscous_w, u_elastic_u, u_elastic_du, du_elastic_du] = share.stiffness_forms(
+    let [mw, mdw, dmd] = share.mass_forms(&problem.matrices.mass, [w, dw], [(0, 0), (0, 1), (1, 1)]);
+    let [aw, bu, bdu, dbd] = share.stiffness_forms(
         (&problem.mesh, &problem.materials),
         [w, u, du],
         [
@@ -466,15 +474,7 @@ fn shared_mechanical_forms(
             (|m| m.elasticity, 2, 2),
         ],
     );
-    MechanicalForms {
-        w_mass_w,
-        w_mass_dw,
-        dw_mass_dw,
-        w_viscous_w,
-        u_elastic_u,
-        u_elastic_du,
-        du_elastic_du,
-    }
+    MechanicalForms::from([mw, mdw, dmd, aw, bu, bdu, dbd])
 }
 
 fn same_pattern(a: &CscMatrix, b: &CscMatrix) -> bool {
