@@ -233,6 +233,7 @@ pub fn energy_levels(problem: &Problem, state: &State) -> Result<(f64, f64, f64)
                 (&problem.mesh, &problem.materials),
                 [&state.u],
                 [(|m| m.elasticity, 0, 0)],
+                None,
             );
             share.sum(&mut part)?;
             part[0]
@@ -258,20 +259,16 @@ pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result
     let share = problem.columns.as_ref();
     let dw: Vec<f64> = w.iter().zip(&previous.w).map(|(a, b)| a - b).collect();
     let du: Vec<f64> = u.iter().zip(&previous.u).map(|(a, b)| a - b).collect();
-    let mut forms = match share {
-        None => mechanical_forms(&problem.matrices, w, &dw, u, &du),
-        Some(share) => shared_mechanical_forms(problem, share, w, &dw, u, &du),
-    };
-    let force = problem.force(state.t)?;
-    // Gᵀw, whose rows the heat balance needs too: k wᵀGθ = k θ·(Gᵀw).
-    let coupling = match share {
+    // The forms, and Gᵀw, whose rows the heat balance needs too: k wᵀGθ = k θ·(Gᵀw).
+    let (mut forms, coupling) = match share {
         None => {
             let mut coupling = vec![0.0; state.theta.len()];
             problem.matrices.coupling.mul_transpose_add(1.0, w, &mut coupling);
-            coupling
+            (mechanical_forms(&problem.matrices, w, &dw, u, &du), coupling)
         }
-        Some(share) => share.coupling_transpose((&problem.mesh, &problem.materials), w),
+        Some(share) => shared_mechanical_forms(problem, share, w, &dw, u, &du),
     };
+    let force = problem.force(state.t)?;
 
     let mut e = StepEnergy {
         thermal_stress: k * owned_dot(share, 1, &state.theta, &coupling),
@@ -454,7 +451,8 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
 
 /// [`mechanical_forms`]' parts on a process that keeps no stiffness matrix ([`ColumnShare`]):
 /// ℳ's forms over the entries of its own nodes (ℳ is whole on every process), 𝒦_A's and 𝒦_B's
-/// over the cells it owns, from the kernels ([`ColumnShare::stiffness_forms`]).
+/// over the cells it owns, from the kernels ([`ColumnShare::stiffness_forms`]); with Gᵀw at
+/// its nodes, from the same pass over its cells.
 fn shared_mechanical_forms(
     problem: &Problem,
     share: &ColumnShare,
@@ -462,8 +460,9 @@ fn shared_mechanical_forms(
     dw: &[f64],
     u: &[f64],
     du: &[f64],
-) -> MechanicalForms {
+) -> (MechanicalForms, Vec<f64>) {
     let [mw, mdw, dmd] = share.mass_forms(&problem.matrices.mass, [w, dw], [(0, 0), (0, 1), (1, 1)]);
+    let mut coupling = vec![0.0; problem.mesh.n_nodes()];
     let [aw, bu, bdu, dbd] = share.stiffness_forms(
         (&problem.mesh, &problem.materials),
         [w, u, du],
@@ -473,8 +472,9 @@ fn shared_mechanical_forms(
             (|m| m.elasticity, 1, 2),
             (|m| m.elasticity, 2, 2),
         ],
+        Some((0, &mut coupling)),
     );
-    MechanicalForms::from([mw, mdw, dmd, aw, bu, bdu, dbd])
+    (MechanicalForms::from([mw, mdw, dmd, aw, bu, bdu, dbd]), coupling)
 }
 
 fn same_pattern(a: &CscMatrix, b: &CscMatrix) -> bool {

@@ -17,7 +17,7 @@
 //! matrix's sum assembles the kept columns for its while and drops them
 //! ([`crate::fem::assembly::assemble_stiffness_columns`], the same bits), and the two other
 //! users, the right-hand side's −𝒦_B U_{n−1} and the energies, are summed cell by cell from the
-//! kernels ([`ColumnShare::stiffness_mul_add`], [`ColumnShare::coupling_transpose`],
+//! kernels ([`ColumnShare::stiffness_mul_add`],
 //! [`ColumnShare::stiffness_forms`]): the same sums as the matrices', to rounding.
 //!
 //! **The energies** ([`crate::model::energy`]) are sums over cells and nodes. A rank sums the
@@ -139,45 +139,40 @@ impl ColumnShare {
         }
     }
 
-    /// Gᵀw at the nodes of this process's own and Γ_C's nodes (the others partial), summed
-    /// cell by cell: each of a cell's nodes gets c ∫_T div w / (d + 1)
-    /// (`fem::kernels::divergence_integral`).
-    pub fn coupling_transpose(&self, (mesh, materials): (&Mesh, &CellMaterials), w: &[f64]) -> Vec<f64> {
-        let d = mesh.dim;
-        let mut out = vec![0.0; mesh.n_nodes()];
-        for &e in &self.row_cells {
-            let (t, nodes) = cell_simplex(mesh, e as usize);
-            let share = materials.of(e as usize).expansion * kernels::divergence_integral(&t, &nodal(d, nodes, w))
-                / (d + 1) as f64;
-            nodes.iter().for_each(|&p| out[p] += share);
-        }
-        out
-    }
-
     /// This process's part of the forms x_aᵀ 𝒦 x_b of `forms` (law, a, b) over the vector fields
     /// `fields` (full nodal vectors), 𝒦 the stiffness of the law: the sums over the cells it
     /// owns (the owner of a cell's lowest node sums it) of ∫_T 𝒯ε(x_a) : ε(x_b)
     /// (`fem::kernels::isotropic_energy_density`, each field's gradient taken once a cell), to be
-    /// summed over the ranks ([`ColumnShare::sum`]).
+    /// summed over the ranks ([`ColumnShare::sum`]). With `coupling` = (c, out), the same pass
+    /// also gives Gᵀx_c in `out` (a vector of the mesh's nodes) at this process's own and Γ_C's
+    /// nodes (the others partial): each node of a cell gets c_T ∫_T div x_c / (d + 1), from
+    /// every cell that holds one of those nodes.
     pub fn stiffness_forms<const N: usize, const F: usize>(
         &self,
         (mesh, materials): (&Mesh, &CellMaterials),
         fields: [&[f64]; N],
         forms: [(LawOf, usize, usize); F],
+        mut coupling: Option<(usize, &mut [f64])>,
     ) -> [f64; F] {
         let d = mesh.dim;
         let mut sums = [0.0; F];
-        for e in self
-            .row_cells
-            .iter()
-            .map(|&e| e as usize)
-            .filter(|&e| self.owns_cell(mesh, e))
-        {
+        for e in self.row_cells.iter().map(|&e| e as usize) {
+            let owned = self.owns_cell(mesh, e);
+            if !owned && coupling.is_none() {
+                continue;
+            }
             let (t, nodes) = cell_simplex(mesh, e);
             let material = materials.of(e);
             let grads = fields.map(|x| kernels::gradient_of(&t, &nodal(d, nodes, x)));
-            for (sum, &(law, a, b)) in sums.iter_mut().zip(&forms) {
-                *sum += t.measure * kernels::isotropic_energy_density(d, law(material), &grads[a], &grads[b]);
+            if let Some((c, out)) = coupling.as_mut() {
+                let div: f64 = (0..d).map(|i| grads[*c][i][i]).sum();
+                let share = material.expansion * t.measure * div / (d + 1) as f64;
+                nodes.iter().for_each(|&p| out[p] += share);
+            }
+            if owned {
+                for (sum, &(law, a, b)) in sums.iter_mut().zip(&forms) {
+                    *sum += t.measure * kernels::isotropic_energy_density(d, law(material), &grads[a], &grads[b]);
+                }
             }
         }
         sums
