@@ -622,17 +622,12 @@ impl ProblemBuilder {
         // a law scales with the pressure.
         let with_pressure = self.friction.iter().any(|f| f.3 == NormalForce::Reaction);
         let pressure_columns = columns.as_ref().map(|_| {
-            let on_contact = mesh.nodes_on(&parts.contact);
-            let mut kept = vec![false; mesh.n_nodes()];
-            if with_pressure {
-                for e in 0..mesh.n_cells() {
-                    let nodes = mesh.cell(e);
-                    if nodes.iter().any(|&p| on_contact[p]) {
-                        nodes.iter().for_each(|&p| kept[p] = true);
-                    }
-                }
-            }
-            kept
+            let rows = if with_pressure {
+                mesh.nodes_on(&parts.contact)
+            } else {
+                vec![false; mesh.n_nodes()]
+            };
+            super::share::columns_read_by(&mesh, &rows)
         });
         let mut matrices =
             assembly::assemble_columns(&mesh, &materials, (&parts.contact, k_e), pressure_columns.as_deref());

@@ -66,16 +66,7 @@ impl ColumnShare {
     /// over the ranks).
     pub fn new(mesh: &Mesh, owned: Vec<bool>, on_contact: &[bool]) -> Self {
         let rows: Vec<bool> = owned.iter().zip(on_contact).map(|(&o, &c)| o || c).collect();
-        let mut kept = vec![false; mesh.n_nodes()];
-        let mut row_cells = Vec::new();
-        for e in 0..mesh.n_cells() {
-            let nodes = mesh.cell(e);
-            if nodes.iter().any(|&p| rows[p]) {
-                nodes.iter().for_each(|&p| kept[p] = true);
-                row_cells.push(crate::la::row_index(e));
-            }
-        }
-        row_cells.shrink_to_fit();
+        let (kept, row_cells) = around(mesh, &rows);
         ColumnShare {
             owned,
             kept,
@@ -116,7 +107,7 @@ impl ColumnShare {
     }
 
     /// y += α 𝒦 x in the rows of this process's own and Γ_C's nodes (full nodal dofs; the other
-    /// rows get partial sums), 𝒦 the viscous (`Law::Viscosity`) or elastic stiffness, summed
+    /// rows get partial sums), 𝒦 the stiffness of `law` (`|m| m.viscosity`: 𝒦_A), summed
     /// cell by cell from the kernels (`fem::kernels::isotropic_stiffness_product`): the rows of the
     /// assembled product, to rounding, without the matrix.
     pub fn stiffness_mul_add(
@@ -222,6 +213,29 @@ impl ColumnShare {
             }
         }
     }
+}
+
+/// The nodes of the cells that hold one of the nodes `rows` (the columns those nodes' rows
+/// read), and those cells.
+fn around(mesh: &Mesh, rows: &[bool]) -> (Vec<bool>, Vec<u32>) {
+    let mut kept = vec![false; mesh.n_nodes()];
+    let mut cells = Vec::new();
+    for e in 0..mesh.n_cells() {
+        let nodes = mesh.cell(e);
+        if nodes.iter().any(|&p| rows[p]) {
+            nodes.iter().for_each(|&p| kept[p] = true);
+            cells.push(crate::la::row_index(e));
+        }
+    }
+    cells.shrink_to_fit();
+    (kept, cells)
+}
+
+/// The columns that the rows of the nodes `rows` read: the nodes of the cells that hold one of
+/// them (a share's own and Γ_C's rows, [`ColumnShare::kept`]; Γ_C's alone for the contact
+/// pressure's rows).
+pub(super) fn columns_read_by(mesh: &Mesh, rows: &[bool]) -> Vec<bool> {
+    around(mesh, rows).0
 }
 
 /// Which of a material's isotropic laws a stiffness is of (`|m| m.viscosity`: 𝒦_A,
