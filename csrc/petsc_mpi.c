@@ -1,7 +1,8 @@
 /* The thin C layer between thermocontact and PETSc + MPI on MPI_COMM_WORLD (cargo feature `mpi`):
  * the communicator's rank, size, reductions, broadcast, barrier and abort; the partition of a
  * graph by PETSc's MatPartitioning (PT-Scotch); a distributed AIJ matrix assembled by the COO
- * API with its Krylov solver (GMRES + block Jacobi/ILU(0) or GAMG), its right-hand side
+ * API with its Krylov solver (GCR, which keeps its residual for the next solve, + block
+ * Jacobi/ILU(0), Schwarz sweeps or GAMG), its right-hand side
  * assembled by PETSc (off-process entries sent by VecAssembly) and its solution gathered on rank 0.
  *
  * As csrc/petsc_amg.c: compiled against the installed headers, plain C types across the
@@ -18,6 +19,11 @@
 int            tc_petsc_initialize(void);
 PetscErrorCode tc_gamg_on(Mat A, int n_modes, const double *modes, const char *prefix, const char *smooth_option,
                           int fine_smooth_its, KSP *ksp);
+
+/* A documented user-level function that PETSc 3.18 declares only in its private petscimpl.h
+ * (libpetsc exports it; later versions declare it in petscsys.h: a second identical
+ * declaration is valid C). */
+PETSC_EXTERN PetscErrorCode PetscObjectStateGet(PetscObject, PetscObjectState *);
 
 static int tc_we_initialized_mpi = 0;
 
@@ -169,6 +175,17 @@ struct tc_dist {
   Vec       coarse_in, coarse_out, residual, sweep;
   PetscInt  n_slots;
   PetscInt *slot_row, *slot;
+  /* The operator the Krylov solver multiplies by: a MATSHELL over A (tc_dist_product) that
+   * answers a product with x while x is still the zero a correction solve set it to (x's
+   * state then: x_zero_state, x_zero_known) by zero, without reading A. */
+  Mat              product;
+  PetscObjectState x_zero_state;
+  PetscBool        x_zero_known;
+  /* The relative tolerance and iteration cap of tc_dist_krylov, and the final residual's
+   * vector and a work vector for KSPBuildResidual (made at the first solve that asks). */
+  PetscReal rtol;
+  PetscInt  max_its;
+  Vec       final_residual, work;
 };
 typedef struct tc_dist tc_dist;
 
@@ -191,6 +208,9 @@ void tc_dist_destroy(tc_dist *dist)
   VecDestroy(&dist->sweep);
   PetscFree2(dist->slot_row, dist->slot);
   KSPDestroy(&dist->ksp);
+  MatDestroy(&dist->product);
+  VecDestroy(&dist->final_residual);
+  VecDestroy(&dist->work);
   MatDestroy(&dist->A);
   VecDestroy(&dist->b);
   VecDestroy(&dist->x);
@@ -554,21 +574,53 @@ int tc_dist_set_rows(tc_dist *dist, int n_rows, const int *rows, const long long
   PetscFunctionReturn(0);
 }
 
-/* The Krylov solver on the current values: GMRES(restart) with block Jacobi + ILU(0)
+/* y = A x, or y = 0 without reading A where x is the solver's x still at the zero that
+ * tc_dist_solve_from set it to (its object state unchanged since): the initial residual
+ * b − A·0 of a correction solve, free. Every rank takes the same branch (the same calls change
+ * x's state alike on every rank), so the product's scatter is entered by all or none. */
+static PetscErrorCode tc_dist_product(Mat product, Vec x, Vec y)
+{
+  tc_dist         *dist;
+  PetscObjectState state;
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(product, &dist));
+  if (dist->x_zero_known && x == dist->x) {
+    PetscCall(PetscObjectStateGet((PetscObject)x, &state));
+    if (state == dist->x_zero_state) {
+      PetscCall(VecZeroEntries(y));
+      PetscFunctionReturn(0);
+    }
+  }
+  PetscCall(MatMult(dist->A, x, y));
+  PetscFunctionReturn(0);
+}
+
+/* The Krylov solver on the current values: GCR(restart) (PETSc's KSPGCR: GMRES's iterates in
+ * exact arithmetic, with its residual and solution kept explicitly, so that a solve ends without
+ * a last preconditioner application and hands its residual over, tc_dist_solve_from) on A
+ * through tc_dist_product, with block Jacobi + ILU(0)
  * (preconditioner 0), GAMG (1), block Jacobi with the caller's block preconditioner (2, a
  * PCSHELL, given to each tc_dist_solve_from) or restricted additive Schwarz with the caller's
  * preconditioner of the overlapped block (3, a PCSHELL: tc_dist_set_overlap first), relative tolerance rtol, at most max_its
  * iterations; options under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
 static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
 {
-  PC pc;
+  PC       pc;
+  PetscInt m, n;
   PetscFunctionBeginUser;
+  if (!dist->product) {
+    PetscCall(MatGetLocalSize(dist->A, &m, &n));
+    PetscCall(MatCreateShell(PETSC_COMM_WORLD, m, n, PETSC_DETERMINE, PETSC_DETERMINE, dist, &dist->product));
+    PetscCall(MatShellSetOperation(dist->product, MATOP_MULT, (void (*)(void))tc_dist_product));
+  }
+  dist->rtol    = rtol;
+  dist->max_its = max_its;
   PetscCall(KSPDestroy(&dist->ksp));
   PetscCall(KSPCreate(PETSC_COMM_WORLD, &dist->ksp));
   PetscCall(KSPSetOptionsPrefix(dist->ksp, "tc_dist_"));
-  PetscCall(KSPSetOperators(dist->ksp, dist->A, dist->A));
-  PetscCall(KSPSetType(dist->ksp, KSPGMRES));
-  PetscCall(KSPGMRESSetRestart(dist->ksp, restart));
+  PetscCall(KSPSetOperators(dist->ksp, dist->product, dist->A));
+  PetscCall(KSPSetType(dist->ksp, KSPGCR));
+  PetscCall(KSPGCRSetRestart(dist->ksp, restart));
   PetscCall(KSPSetTolerances(dist->ksp, rtol, 0.0, PETSC_DEFAULT, max_its));
   PetscCall(KSPSetNormType(dist->ksp, KSP_NORM_UNPRECONDITIONED));
   PetscCall(KSPSetPCSide(dist->ksp, PC_RIGHT));
@@ -629,10 +681,13 @@ int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residua
   const PetscScalar *x;
   PetscFunctionBeginUser;
   PetscCall(VecZeroEntries(dist->x));
+  PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
   PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
   PetscCall(KSPGetIterationNumber(dist->ksp, &its));
   PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
   PetscCall(KSPGetConvergedReason(dist->ksp, &why));
+  /* PETSc's GCR ends at its iteration cap with KSP_CONVERGED_ITS (positive): not converged. */
+  if (why == KSP_CONVERGED_ITS) why = KSP_DIVERGED_ITS;
   PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
   PetscCall(VecGetLocalSize(dist->x, &n));
   PetscCall(VecGetArrayRead(dist->x, &x));
@@ -645,11 +700,16 @@ int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residua
 }
 
 /* Solves A x = b with this rank's owned entries of b (`rhs`) and of the initial guess (`owned`,
- * overwritten by the solution): no off-process entries, so no assembly. `block_apply` and
+ * overwritten by the solution): no off-process entries, so no assembly. `carried`: NULL, or
+ * this rank's entries of b − A x for that guess, which the solve then starts from instead of a
+ * product with A (it solves A d = b − A x from d = 0, tc_dist_product, and adds d to x, to the
+ * same tolerance on ||b||). `final_residual`: NULL, or where this rank's entries of the
+ * solution's residual b − A x go (the solver's own, kept explicitly by GCR: no product; it may
+ * be `carried`'s buffer, read before it is written). `block_apply` and
  * `block_ctx`: the block preconditioner of preconditioner 2 for this solve (NULL otherwise).
  * Iterations, the final relative residual ||b - Ax|| / ||b|| and the converged reason as
  * tc_dist_solve. */
-int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned,
+int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, double *owned, double *final_residual,
                        int (*block_apply)(void *, const double *, double *, int), void *block_ctx,
                        int *iterations, double *residual, int *reason)
 {
@@ -658,29 +718,62 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, double *owned,
   KSPConvergedReason why;
   PetscScalar       *v;
   const PetscScalar *x;
+  Vec                r;
   PetscFunctionBeginUser;
   PetscCall(VecGetLocalSize(dist->b, &n));
   PetscCall(VecGetArray(dist->b, &v));
   memcpy(v, rhs, (size_t)n * sizeof(double));
   PetscCall(VecRestoreArray(dist->b, &v));
-  PetscCall(VecGetArray(dist->x, &v));
-  memcpy(v, owned, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArray(dist->x, &v));
+  PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
+  /* A zero b leaves the tolerance on ||b|| at zero: solved from the guess, as before. */
+  if (carried && bnorm > 0) {
+    PetscCall(VecGetArray(dist->b, &v));
+    memcpy(v, carried, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArray(dist->b, &v));
+    PetscCall(VecZeroEntries(dist->x));
+    PetscCall(PetscObjectStateGet((PetscObject)dist->x, &dist->x_zero_state));
+    dist->x_zero_known = PETSC_TRUE;
+    PetscCall(KSPSetTolerances(dist->ksp, 0.0, dist->rtol * bnorm, PETSC_DEFAULT, dist->max_its));
+  } else {
+    carried = NULL;
+    PetscCall(VecGetArray(dist->x, &v));
+    memcpy(v, owned, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArray(dist->x, &v));
+    PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
+  }
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
   dist->block_apply = block_apply;
   dist->block_ctx   = block_ctx;
   PetscErrorCode solved = KSPSolve(dist->ksp, dist->b, dist->x);
-  dist->block_apply = NULL;
-  dist->block_ctx   = NULL;
+  dist->block_apply  = NULL;
+  dist->block_ctx    = NULL;
+  dist->x_zero_known = PETSC_FALSE;
   PetscCall(solved);
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
   PetscCall(KSPGetIterationNumber(dist->ksp, &its));
   PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
   PetscCall(KSPGetConvergedReason(dist->ksp, &why));
-  PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
+  /* PETSc's GCR ends at its iteration cap with KSP_CONVERGED_ITS (positive): not converged. */
+  if (why == KSP_CONVERGED_ITS) why = KSP_DIVERGED_ITS;
+  if (carried) {
+    /* x = guess + d, in the solver's x too: the gathers read the solution there. */
+    PetscCall(VecGetArray(dist->x, &v));
+    for (PetscInt i = 0; i < n; ++i) v[i] += owned[i];
+    PetscCall(VecRestoreArray(dist->x, &v));
+  }
   PetscCall(VecGetArrayRead(dist->x, &x));
   memcpy(owned, x, (size_t)n * sizeof(double));
   PetscCall(VecRestoreArrayRead(dist->x, &x));
+  if (final_residual) {
+    if (!dist->final_residual) {
+      PetscCall(VecDuplicate(dist->b, &dist->final_residual));
+      PetscCall(VecDuplicate(dist->b, &dist->work));
+    }
+    PetscCall(KSPBuildResidual(dist->ksp, dist->work, dist->final_residual, &r));
+    PetscCall(VecGetArrayRead(r, &x));
+    memcpy(final_residual, x, (size_t)n * sizeof(double));
+    PetscCall(VecRestoreArrayRead(r, &x));
+  }
   *iterations = (int)its;
   *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
   *reason = (int)why;

@@ -7,7 +7,7 @@
 //! a frame, ends every rank with a non-zero status, the message once and a folder that says
 //! `failed`.
 //!
-//! **The bound.** Each rank's GMRES stops at ‖b − Ax‖ ≤ 10⁻¹⁰ ‖b‖ as the serial one does, but
+//! **The bound.** The ranks' GCR stops at ‖b − Ax‖ ≤ 10⁻¹⁰ ‖b‖ as the serial GMRES does, but
 //! with another preconditioner (ILU(0) on the ranks' overlapping parts), so the Newton
 //! iterates differ by the solves' errors, and the convexification loop, which stops once its
 //! relative changes fall below ε_conv = 10⁻⁶, may stop one iterate apart: each step's solution

@@ -220,7 +220,7 @@ mod distributed {
 
     /// The same system given as each rank's CSR rows, each rank's last row (and its load) then
     /// doubled through `set_rows`,
-    /// solved from zero by GMRES with block Jacobi whose blocks apply the ILU(0) of each rank's
+    /// solved from zero by GCR with block Jacobi whose blocks apply the ILU(0) of each rank's
     /// tridiagonal block (exact there) through PETSc's PCSHELL: the same exact nodal values. The
     /// shell without a block preconditioner is an error, not a crash.
     fn a_changed_row_solved_with_the_callers_blocks_is_exact(mut matrix: DistributedMatrix, h: f64) {
@@ -257,8 +257,8 @@ mod distributed {
             ..DistributedKrylov::default()
         };
         let mut u = vec![0.0; owned.len()];
-        assert!(matrix.solve_from(&params, &rhs, &mut u, None).is_err());
-        let info = matrix.solve_from(&params, &rhs, &mut u, Some(&block)).unwrap();
+        assert!(matrix.solve_from(&params, (&rhs, &mut u), None, None).is_err());
+        let info = matrix.solve_from(&params, (&rhs, &mut u), None, Some(&block)).unwrap();
         assert_exact(owned, &u, h, &format!("block Jacobi, {} iterations", info.iterations));
     }
 
@@ -275,6 +275,8 @@ mod distributed {
     /// read (its overlap), numbered [owned, overlap], the rank's own read where PETSc keeps them
     /// (`split_rows`), the overlap's fetched from their ranks (`fetch_rows`); its ILU(0) through
     /// PETSc's PCSHELL gives the exact nodal values. An overlap naming an owned row is an error.
+    /// The solve's residual, handed to the next solve (every right-hand side doubled), starts it
+    /// without a product: 2u; a zero residual handed over leaves u as it is.
     fn overlapping_blocks_solve_it_exactly(mut matrix: DistributedMatrix, rows: (&[usize], &[u32], &[f64]), h: f64) {
         let (owned, n) = (matrix.owned(), matrix.n_global());
         let (ptr, cols, values) = rows;
@@ -340,10 +342,31 @@ mod distributed {
         };
         let rhs = vec![h; n_owned];
         let mut u = vec![0.0; n_owned];
-        assert!(matrix.solve_from(&params, &rhs, &mut u, None).is_err());
-        let info = matrix.solve_from(&params, &rhs, &mut u, Some(&block)).unwrap();
+        assert!(matrix.solve_from(&params, (&rhs, &mut u), None, None).is_err());
+        let mut residual = Vec::new();
+        let info = (matrix.solve_from(&params, (&rhs, &mut u), Some(&mut residual), Some(&block))).unwrap();
         let what = format!("restricted Schwarz, {} iterations of {n} unknowns", info.iterations);
-        assert_exact(owned, &u, h, &what);
+        assert_exact(owned.clone(), &u, h, &what);
+        // The solver's residual b − A u at this rank's rows, handed over without a product.
+        assert_eq!(residual.len(), n_owned);
+        assert!(residual.iter().all(|r| r.abs() <= 1e-12 * h * n as f64), "{residual:?}");
+        // A Newton iteration's next solve: every right-hand side doubled, started from u with
+        // its residual there (r + h 1, no product with A), gives 2u.
+        let doubled: Vec<f64> = rhs.iter().map(|b| 2.0 * b).collect();
+        let mut carried = residual.clone();
+        carried.iter_mut().zip(&rhs).for_each(|(r, b)| *r += b);
+        let mut v = u.clone();
+        matrix
+            .solve_from(&params, (&doubled, &mut v), Some(&mut carried), Some(&block))
+            .unwrap();
+        let half: Vec<f64> = v.iter().map(|v| v / 2.0).collect();
+        assert_exact(owned, &half, h, "the carried residual's solve, halved");
+        // The solve trusts the residual it is given: zero says u solves the doubled system, and
+        // u stays (so the one above started from the residual, not from a product).
+        let mut trusted = vec![0.0; n_owned];
+        let mut w = u.clone();
+        let info = (matrix.solve_from(&params, (&doubled, &mut w), Some(&mut trusted), Some(&block))).unwrap();
+        assert_eq!((info.iterations, &w), (0, &u));
     }
 
     /// The cells' parts computed on rank 0 reach every rank: the same checksum everywhere. A

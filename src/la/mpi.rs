@@ -4,7 +4,8 @@
 //! `MatPartitioning` ([`partition_graph`], PT-Scotch), and a [`DistributedMatrix`]: a PETSc
 //! MPIAIJ matrix whose pattern is given once, as COO pairs refilled by value or as each rank's
 //! rows that PETSc keeps in the rank's own arrays ([`DistributedMatrix::from_split`]), changed
-//! by rows, with its right-hand side and GMRES preconditioned by block Jacobi (PETSc's ILU(0)
+//! by rows, with its right-hand side and GCR (PETSc's; GMRES's iterates, its residual handed
+//! from one solve to the next: [`DistributedMatrix::solve_from`]) preconditioned by block Jacobi (PETSc's ILU(0)
 //! or the caller's preconditioner of each rank's block), restricted additive Schwarz (the
 //! caller's preconditioner of each rank's overlapped block: its rows and those of other ranks
 //! that they read, [`DistributedMatrix::set_overlap`], fetched by [`DistributedMatrix::fetch_rows`]),
@@ -116,7 +117,9 @@ extern "C" {
     fn tc_dist_solve_from(
         dist: *mut RawDist,
         rhs: *const c_double,
+        carried: *const c_double,
         owned: *mut c_double,
+        final_residual: *mut c_double,
         block_apply: Option<BlockApply>,
         block_ctx: *mut c_void,
         iterations: *mut c_int,
@@ -166,7 +169,7 @@ struct RawVec {
 type BlockApply = unsafe extern "C" fn(ctx: *mut c_void, r: *const c_double, z: *mut c_double, n: c_int) -> c_int;
 
 /// [`BlockApply`] for a `&dyn Preconditioner` (the context points at the reference): PETSc's
-/// PCSHELL calls it once per GMRES iteration. A failure or a panic is returned as 1, which the
+/// PCSHELL calls it once per Krylov iteration. A failure or a panic is returned as 1, which the
 /// C layer turns into a PETSc error of this solve.
 unsafe extern "C" fn apply_block(ctx: *mut c_void, r: *const c_double, z: *mut c_double, n: c_int) -> c_int {
     let applied = std::panic::catch_unwind(|| {
@@ -392,7 +395,7 @@ pub fn partition_graph(xadj: &[usize], adjacency: &[usize], n_parts: usize) -> R
     Ok(part.into_iter().map(|p| p as usize).collect())
 }
 
-/// The preconditioner of the distributed GMRES.
+/// The preconditioner of the distributed Krylov method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DistributedPreconditioner {
     /// Block Jacobi, one block per rank, each block ILU(0): where the mass term dominates (the
@@ -431,8 +434,18 @@ impl DistributedPreconditioner {
     }
 }
 
-/// Parameters of the distributed GMRES (PETSc's KSPGMRES, right-preconditioned, stopped on
-/// the true residual ‖b − Ax‖ ≤ rtol ‖b‖).
+/// Parameters of the distributed Krylov method (PETSc's KSPGCR, right-preconditioned, stopped
+/// on its residual ‖b − Ax‖ ≤ rtol ‖b‖, which it keeps explicitly).
+///
+/// **Why GCR and not PETSc's GMRES.** In exact arithmetic GCR(m) takes GMRES(m)'s iterates (both
+/// minimize ‖b − Ax‖ over the same Krylov space), but it updates x and r = b − Ax explicitly at
+/// each iteration: a solve ends without GMRES's last preconditioner application (x = x₀ +
+/// M⁻¹V y), and its residual is there for the next solve (`KSPBuildResidual`, a copy), which
+/// then needs no product with A to start. The serial GMRES (`la::gmres`) gets both from the
+/// Arnoldi relation; PETSc's GMRES does not hand its basis over. The price: two vectors per
+/// iteration (the directions and their products) against GMRES's one, which the serial GMRES
+/// keeps too. Measured at 972k unknowns on 2 ranks: docs/distributed.md, "GCR: the residual
+/// carried over the ranks".
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DistributedKrylov {
     /// The preconditioner. Default: block Jacobi + ILU(0).
@@ -459,7 +472,7 @@ impl Default for DistributedKrylov {
 /// What a distributed solve did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DistributedSolveInfo {
-    /// GMRES iterations.
+    /// Krylov iterations.
     pub iterations: usize,
     /// Final relative residual ‖b − Ax‖/‖b‖.
     pub residual: f64,
@@ -961,23 +974,25 @@ impl DistributedMatrix {
         Ok(())
     }
 
-    /// Solves A x = b by GMRES from the initial guess x: `rhs` and `x` are this rank's owned
-    /// entries of b and of x (PETSc's layout), x overwritten by the solution. Converged where
-    /// ‖b − Ax‖ ≤ rtol ‖b‖, as the serial GMRES. `block`: the preconditioner of this rank's
-    /// block for [`DistributedPreconditioner::BlockJacobiShell`] (its owned rows and columns, in
-    /// PETSc's order) and [`DistributedPreconditioner::SchwarzShell`] (its owned rows, then its
-    /// overlap's), which need one; unused otherwise.
+    /// Solves A x = b by PETSc's GCR (GMRES's iterates, its residual kept: `tc_dist_krylov`)
+    /// from the initial guess x: `rhs` and `x` are this rank's owned entries of b and of x
+    /// (PETSc's layout), x overwritten by the solution. Converged where ‖b − Ax‖ ≤ rtol ‖b‖, as
+    /// the serial GMRES. `residual`, as the serial [`Gmres::solve`](super::Gmres::solve)'s:
+    /// when it holds this rank's entries of b − A x for the guess, the solve starts from it
+    /// instead of a product with A; it is left holding those of the solution's residual (the
+    /// solver's own, no product), or is empty after a failure. `block`: the preconditioner of
+    /// this rank's block for [`DistributedPreconditioner::BlockJacobiShell`] (its owned rows
+    /// and columns, in PETSc's order) and [`DistributedPreconditioner::SchwarzShell`] (its
+    /// owned rows, then its overlap's), which need one; unused otherwise.
     pub fn solve_from(
         &mut self,
         params: &DistributedKrylov,
-        rhs: &[f64],
-        x: &mut [f64],
+        (rhs, x): (&[f64], &mut [f64]),
+        residual: Option<&mut Vec<f64>>,
         block: Option<&dyn Preconditioner>,
     ) -> Result<DistributedSolveInfo, Error> {
-        assert!(
-            rhs.len() == self.owned.len() && x.len() == self.owned.len(),
-            "the owned entries"
-        );
+        let n = self.owned.len();
+        assert!(rhs.len() == n && x.len() == n, "the owned entries");
         let shell = params.preconditioner.is_shell();
         if shell && block.is_none() {
             return Err(Error::Petsc {
@@ -987,27 +1002,46 @@ impl DistributedMatrix {
         }
         let _petsc = petsc_lock();
         self.krylov_for(params)?;
-        let (mut iterations, mut residual, mut reason) = (0, 0.0, 0);
+        let (mut iterations, mut relative, mut reason) = (0, 0.0, 0);
         let mut context = block.filter(|_| shell);
         let (apply, ctx): (Option<BlockApply>, *mut c_void) = match &mut context {
             Some(block) => (Some(apply_block), (block as *mut &dyn Preconditioner).cast()),
             None => (None, std::ptr::null_mut()),
         };
-        // SAFETY: a live handle; `rhs` and `x` have this rank's row count; `ctx` points at
-        // `context`, alive until the call returns (the C layer forgets it then).
-        check("KSPSolve", unsafe {
+        let mut residual = residual;
+        // One buffer for both: the C layer reads the carried residual before it writes the
+        // final one.
+        let (carried, out) = match residual.as_deref_mut() {
+            Some(r) => {
+                let carried = r.len() == n;
+                r.resize(n, 0.0);
+                let p = r.as_mut_ptr();
+                (if carried { p.cast_const() } else { std::ptr::null() }, p)
+            }
+            None => (std::ptr::null(), std::ptr::null_mut()),
+        };
+        // SAFETY: a live handle; `rhs`, `x` and the residual (when given) have this rank's row
+        // count; `ctx` points at `context`, alive until the call returns (the C layer forgets
+        // it then).
+        let done = check("KSPSolve", unsafe {
             tc_dist_solve_from(
                 self.handle.as_ptr(),
                 rhs.as_ptr(),
+                carried,
                 x.as_mut_ptr(),
+                out,
                 apply,
                 ctx,
                 &mut iterations,
-                &mut residual,
+                &mut relative,
                 &mut reason,
             )
-        })?;
-        solved(params, iterations, residual, reason)
+        })
+        .and_then(|()| solved(params, iterations, relative, reason));
+        if let (Some(r), Err(_)) = (residual, &done) {
+            r.clear();
+        }
+        done
     }
 
     /// Selects the entries of the solution at the global `indices` (each rank its own, any
@@ -1078,7 +1112,7 @@ fn solved(
 ) -> Result<DistributedSolveInfo, Error> {
     if reason <= 0 {
         return Err(Error::KrylovNotConverged {
-            method: "GMRES (PETSc, distributed)",
+            method: "GCR (PETSc, distributed)",
             iterations: iterations as usize,
             rtol: params.rtol,
             residual,

@@ -348,19 +348,39 @@ impl CsrMatrix {
         (self.ptr, self.col, self.val)
     }
 
-    /// The same matrix with rows `0..first` emptied: rows `first..n` kept as they are, with
-    /// their columns (a rank of a distributed run keeps only the rows each linearization
-    /// changes once PETSc and its block have the others: `step::ranks`).
-    pub fn keep_rows_from(self, first: usize) -> Self {
+    /// The same matrix with the rows before `first` emptied but those in `also`: rows
+    /// `first..n` and `also` kept as they are, with their columns (a rank of a distributed run
+    /// keeps only the rows each linearization changes or whose residual it recomputes once
+    /// PETSc and its block have the others: `step::ranks`).
+    pub fn keep_rows(self, first: usize, also: &[usize]) -> Self {
+        let mut kept = vec![false; first];
+        also.iter()
+            .filter(|&&row| row < first)
+            .for_each(|&row| kept[row] = true);
         let start = self.ptr[first];
-        let ptr = (self.ptr.iter().enumerate())
-            .map(|(i, &p)| if i <= first { 0 } else { p - start })
-            .collect();
+        let before: usize = (0..first)
+            .filter(|&row| kept[row])
+            .map(|row| self.ptr[row + 1] - self.ptr[row])
+            .sum();
+        let (mut col, mut val) = (
+            Vec::with_capacity(before + self.nnz() - start),
+            Vec::with_capacity(before + self.nnz() - start),
+        );
+        let mut ptr = Vec::with_capacity(self.n + 1);
+        ptr.push(0);
+        for row in 0..self.n {
+            if row >= first || kept[row] {
+                let range = self.ptr[row]..self.ptr[row + 1];
+                col.extend_from_slice(&self.col[range.clone()]);
+                val.extend_from_slice(&self.val[range]);
+            }
+            ptr.push(col.len());
+        }
         CsrMatrix {
             n: self.n,
             ptr,
-            col: self.col[start..].to_vec(),
-            val: self.val[start..].to_vec(),
+            col,
+            val,
         }
     }
 
@@ -422,19 +442,26 @@ pub(crate) fn sparse_dot32<V: Copy + Into<f64>>(cols: &[u32], vals: &[V], x: &[f
 mod tests {
     use super::*;
 
-    /// Rows kept from `first` on are the rows they were, their values where
-    /// [`CsrMatrix::values_from`] finds them; the rows before are empty.
+    /// Rows kept from `first` on and those named are the rows they were, their values where
+    /// [`CsrMatrix::values_from`] finds them; the other rows are empty.
     #[test]
     fn kept_rows_are_the_rows_and_the_others_are_empty() {
-        let a = CsrMatrix::from_rows(3, vec![0, 2, 3, 5], vec![0, 2, 1, 0, 2], vec![1.0, 2.0, 3.0, 4.0, 5.0]);
-        let kept = a.clone().keep_rows_from(1);
+        let a = CsrMatrix::from_rows(
+            4,
+            vec![0, 2, 3, 5, 6],
+            vec![0, 2, 1, 0, 2, 3],
+            vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        );
+        let kept = a.clone().keep_rows(2, &[1]);
         assert_eq!(kept.row(0), (&[][..], &[][..]));
-        for i in 1..3 {
+        for i in 1..4 {
             assert_eq!(kept.row(i), a.row(i));
-            assert_eq!(kept.offset_from(1, i), a.offset_from(1, i));
         }
-        assert_eq!(kept.values_from(1), a.values_from(1));
-        assert_eq!(kept.nnz(), 3);
+        for i in 2..4 {
+            assert_eq!(kept.offset_from(2, i), a.offset_from(2, i));
+        }
+        assert_eq!(kept.values_from(2), a.values_from(2));
+        assert_eq!(kept.nnz(), 4);
     }
 
     #[test]

@@ -77,7 +77,7 @@ pub(super) enum KrylovSolver {
     /// This process's GMRES (its vectors kept from solve to solve; boxed, as the solver is a
     /// variant of the step's linear system) with the ILU(0) of Ã.
     Process { ilu: Ilu0, gmres: Box<Gmres> },
-    /// PETSc's GMRES over the ranks.
+    /// PETSc's GCR over the ranks.
     #[cfg(feature = "mpi")]
     Ranks(super::ranks::RankKrylov),
 }
@@ -204,10 +204,19 @@ fn ranks_system(
         DistributedPreconditioner::BlockJacobiShell
     };
     let rows = RankRows::new(problem, order)?;
-    let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &rows.assembled(first_contact));
+    // The contact nodes' temperature rows: a linearization changes their right-hand side (the
+    // frictional heat), and the Newton method recomputes their residual from Ã's rows.
+    let n_w = problem.velocity.n_free;
+    let mut position = vec![0; order.len()];
+    order.iter().enumerate().for_each(|(row, &u)| position[u] = row);
+    let theta_rows: Vec<usize> = (problem.contact.iter())
+        .filter_map(|node| node.theta_dof.map(|r| position[n_w + r]))
+        .collect();
+    drop(position);
+    let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &rows.assembled(first_contact, &theta_rows));
     let (mut ranks, a) = RankKrylov::new(
         rows,
-        (a, first_contact),
+        (a, first_contact, &theta_rows),
         krylov(first, params.rtol, params.max_iterations),
     )?;
     if params.preconditioner == PreconditionerKind::Amg {
@@ -362,12 +371,9 @@ impl KrylovSystem {
         match (solver, &self.amg) {
             (KrylovSolver::Process { ilu, gmres }, None) => gmres.solve(a, &*ilu, rhs, x, residual),
             (KrylovSolver::Process { ilu, gmres }, Some(amg)) => gmres.solve(a, &amg.with(a, ilu), rhs, x, residual),
-            // PETSc keeps its own residual: the caller's is left empty (not carried over).
+            // At this rank's own rows (`RankKrylov::solve`).
             #[cfg(feature = "mpi")]
-            (KrylovSolver::Ranks(ranks), _) => {
-                residual.clear();
-                ranks.solve(rhs, x)
-            }
+            (KrylovSolver::Ranks(ranks), _) => ranks.solve(rhs, x, residual),
         }
     }
 
@@ -470,8 +476,8 @@ impl Drop for StepWork<'_> {
     }
 }
 
-/// Solves Ã x = b̃ by GMRES from x (`residual`: b̃ − Ã x on entry when it has n entries, and
-/// after), counts the solve from `clock` on, and returns its Krylov iterations. A solve at its
+/// Solves Ã x = b̃ by GMRES (GCR over the ranks) from x (`residual`: b̃ − Ã x on entry when it
+/// has n entries, and after; over the ranks at each rank's own rows), counts the solve from `clock` on, and returns its Krylov iterations. A solve at its
 /// cap is a step failure of the linear solve, with its residual history.
 pub(super) fn krylov_solve(
     sys: &KrylovSystem,
@@ -481,6 +487,11 @@ pub(super) fn krylov_solve(
     residual: &mut Vec<f64>,
     clock: Instant,
 ) -> Result<usize, SolveError> {
+    let loop_name = match solver {
+        KrylovSolver::Process { .. } => "GMRES",
+        #[cfg(feature = "mpi")]
+        KrylovSolver::Ranks(_) => "GCR",
+    };
     let solved = sys.gmres((a, solver), rhs, x, residual);
     sys.count(|s| {
         s.solves += 1;
@@ -502,7 +513,7 @@ pub(super) fn krylov_solve(
             ..
         }) => Err(SolveError::NotConverged(StepFailure {
             solver: "iterative",
-            loop_name: "GMRES",
+            loop_name,
             iterations,
             criterion: Criterion::LinearResidual,
             value: residual,

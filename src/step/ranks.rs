@@ -13,11 +13,15 @@
 //! frames' pieces: [`Problem::partition`]; [`DofLayout`]: each rank's unknowns consecutive),
 //! hands them to PETSc's MPIAIJ matrix at set-up, split into its diagonal block and the rest,
 //! which PETSc keeps without a copy ([`DistributedMatrix::from_split`]) and, after each
-//! linearization, only the rows it changed ([`DistributedMatrix::set_rows`]), and GMRES runs
-//! with restricted additive Schwarz (one overlapping block per rank: the rank's rows and those of
+//! linearization, only the rows it changed ([`DistributedMatrix::set_rows`]), and PETSc's GCR
+//! (GMRES's iterates; it keeps its residual: [`DistributedKrylov`]'s header) runs with
+//! restricted additive Schwarz (one overlapping block per rank: the rank's rows and those of
 //! other ranks that they read), block Jacobi (one block per rank, `solver.overlap = 0`), or
 //! either's sweeps around GAMG on the velocity block (the serial path's two-level method,
-//! [`RankKrylov::set_velocity_amg`]), from the previous iterate as the serial solves do. Each rank's unknowns are numbered in
+//! [`RankKrylov::set_velocity_amg`]), from the previous iterate and its residual as the serial
+//! solves do: the rows of the residual that a linearization changes (Ã's Γ_C rows, and the
+//! contact nodes' temperature rows, whose right-hand side carries the frictional heat) are
+//! recomputed on every rank from the rows it keeps, the others are the last solve's. Each rank's unknowns are numbered in
 //! the system's order, so its block has its Γ_C rows last (then, with Schwarz, its overlap's
 //! rows) and its ILU(0) is the serial path's: single precision, refactored only from the first
 //! row a linearization changes ([`RankBlock`]). Of the solution each rank takes its own
@@ -45,7 +49,7 @@
 //! against the Krylov solve's O(N) per Krylov iteration times 5–30 iterations: replicated, they
 //! cost little, and the ranks cannot disagree on a branch (a rank that stops its loop while
 //! another iterates would hang in the next collective call). What replication costs is memory
-//! (what every rank holds whole: 525 bytes per unknown, 0.49 of a rank's 1.55 GiB at 972k
+//! (what every rank holds whole: ≈ 520 bytes per unknown, 0.36 of a rank's 1.3 GiB at 972k
 //! unknowns on 2 ranks) and a gather of N values per step; docs/distributed.md gives the figures
 //! and what ends them (the law on owned Γ_C nodes, ghost updates and reductions for the tests).
 //!
@@ -83,11 +87,13 @@ pub(crate) struct RankKrylov {
 /// The vectors of [`RankKrylov::solve`], kept for the run (boxed, as `changing`: the solver
 /// is a variant of the step's linear system).
 struct SolveExchange {
-    /// This rank's entries of b̃ and of x for PETSc.
+    /// This rank's entries of b̃, of x and of the residual b̃ − Ã x for PETSc.
     owned_rhs: Vec<f64>,
     owned_x: Vec<f64>,
+    owned_residual: Vec<f64>,
     /// The rows of x (the system's order) that a linearization reads besides this rank's own:
-    /// the columns of Ã's rows from `first_changing` on, gathered after each solve; and their
+    /// the columns of Ã's rows from `first_changing` on and of the rows whose residual the
+    /// caller recomputes (`RankKrylov::new`'s `also`), gathered after each solve; and their
     /// values.
     read: Vec<usize>,
     read_values: Vec<f64>,
@@ -327,11 +333,19 @@ impl RankRows {
         })
     }
 
-    /// The rows of Ã this rank assembles: its own, and every row from `first_changing` on
-    /// (those a linearization changes, which every rank forms from the same iterate).
-    pub(crate) fn assembled(&self, first_changing: usize) -> Vec<usize> {
+    /// The rows of Ã this rank assembles: its own, every row from `first_changing` on (those a
+    /// linearization changes, which every rank forms from the same iterate) and the rows
+    /// `also` (those whose right-hand side a linearization changes: the caller recomputes their
+    /// residual).
+    pub(crate) fn assembled(&self, first_changing: usize, also: &[usize]) -> Vec<usize> {
         let own = self.owned.iter().copied().filter(|&row| row < first_changing);
-        own.chain(first_changing..self.global_of_row.len()).collect()
+        let mut rows: Vec<usize> = own
+            .chain(also.iter().copied().filter(|&row| row < first_changing))
+            .collect();
+        rows.sort_unstable();
+        rows.dedup();
+        rows.extend(first_changing..self.global_of_row.len());
+        rows
     }
 
     /// This rank's rows of `a` as PETSc keeps them ([`DistributedMatrix::from_split`]): the
@@ -381,8 +395,9 @@ impl RankKrylov {
     /// Sets PETSc's matrix up with this rank's rows of `a` (the system's rows, laid out by
     /// `rows`; at least [`RankRows::assembled`]'s rows of Ã), the rows from `first_changing`
     /// on those a linearization changes, and returns the solver with `a`'s rows from
-    /// `first_changing` on, the only ones read after set-up (the others emptied:
-    /// [`CsrMatrix::keep_rows_from`]); collective.
+    /// `first_changing` on and the rows `also` (before it: rows whose right-hand side a
+    /// linearization changes), the only ones read after set-up (the others emptied:
+    /// [`CsrMatrix::keep_rows`]); collective.
     ///
     /// One copy of the rank's rows is made, split as PETSc keeps them
     /// ([`DistributedMatrix::from_split`], which keeps that copy, not one of its own); `a`'s
@@ -390,7 +405,7 @@ impl RankKrylov {
     /// Measured at 972k unknowns on 2 ranks: docs/distributed.md.
     pub(crate) fn new(
         rows: RankRows,
-        (a, first_changing): (CsrMatrix, usize),
+        (a, first_changing, also): (CsrMatrix, usize, &[usize]),
         params: DistributedKrylov,
     ) -> Result<(Self, CsrMatrix), LaError> {
         let comm = Communicator::world()?;
@@ -398,7 +413,7 @@ impl RankKrylov {
         let first = rows.owned.partition_point(|&row| row < first_changing);
         let (diagonal, off_diagonal, value_of_entry) = rows.split(&a, first_changing);
         let n_entries = diagonal.1.len() + off_diagonal.1.len();
-        let a = a.keep_rows_from(first_changing);
+        let a = a.keep_rows(first_changing, also);
         let mut overlap = None;
         let (diagonal, mut block) = match params.preconditioner {
             DistributedPreconditioner::BlockJacobiShell => {
@@ -434,6 +449,7 @@ impl RankKrylov {
             values: Vec::with_capacity(cols.len()),
         });
         let mut read: Vec<usize> = (first_changing..a.n())
+            .chain(also.iter().copied())
             .flat_map(|row| a.row(row).0.iter().map(|&c| c as usize))
             .collect();
         read.sort_unstable();
@@ -442,6 +458,7 @@ impl RankKrylov {
         let exchange = Box::new(SolveExchange {
             owned_rhs: Vec::with_capacity(rows.owned.len()),
             owned_x: Vec::with_capacity(rows.owned.len()),
+            owned_residual: Vec::with_capacity(rows.owned.len()),
             read_values: vec![0.0; read.len()],
             read,
         });
@@ -485,30 +502,53 @@ impl RankKrylov {
         self.matrix.set_rows(pattern, values)
     }
 
-    /// Solves Ã x = b̃ by PETSc's GMRES from x (b̃ and x in the system's order, the same on
-    /// every rank at the rows it reads: its own), x replaced by the solution at this rank's own
-    /// rows and at the rows a linearization reads (the columns of Ã's Γ_C rows, the same on
-    /// every rank), the other rows left as they were; collective. So between the Newton
-    /// iterations of a step a rank's x is the iterate where the iterations read it, and
+    /// Solves Ã x = b̃ by PETSc's GCR from x (b̃ and x in the system's order, the same on every
+    /// rank at the rows it reads: its own), x replaced by the solution at this rank's own rows
+    /// and at the rows a linearization reads (the columns of Ã's Γ_C rows, the same on every
+    /// rank), the other rows left as they were; collective. So between the Newton iterations
+    /// of a step a rank's x is the iterate where the iterations read it, and
     /// [`RankKrylov::gather_whole`] makes it whole once the step is solved: a gather of the
     /// Γ_C rows' neighbourhood per Newton iteration, of N values per step.
-    pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64]) -> Result<SolveInfo, LaError> {
+    ///
+    /// `residual`, as the serial [`Gmres::solve`](crate::la::Gmres::solve)'s but read and
+    /// written at this rank's own rows only: when it has n entries, b̃ − Ã x at those rows,
+    /// which the solve starts from instead of a product with Ã (a caller recomputes it where a
+    /// linearization changed Ã or b̃: Ã's kept rows, [`RankKrylov::new`]); left with n entries
+    /// holding the solution's residual there (PETSc's GCR keeps it), or empty after a failure.
+    pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64], residual: &mut Vec<f64>) -> Result<SolveInfo, LaError> {
         let SolveExchange {
             owned_rhs,
             owned_x,
+            owned_residual,
             read,
             read_values,
         } = &mut *self.exchange;
+        let owned = &self.rows.owned;
         owned_rhs.clear();
-        owned_rhs.extend(self.rows.owned.iter().map(|&row| rhs[row]));
+        owned_rhs.extend(owned.iter().map(|&row| rhs[row]));
         owned_x.clear();
-        owned_x.extend(self.rows.owned.iter().map(|&row| x[row]));
+        owned_x.extend(owned.iter().map(|&row| x[row]));
+        owned_residual.clear();
+        if residual.len() == x.len() {
+            owned_residual.extend(owned.iter().map(|&row| residual[row]));
+        }
         let block = self.block.as_ref().map(|b| &b.ilu as &dyn Preconditioner);
-        let solved = self.matrix.solve_from(&self.params, owned_rhs, owned_x, block);
+        let solved = (self.matrix).solve_from(&self.params, (owned_rhs, owned_x), Some(owned_residual), block);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
-        let info = solved?;
+        let info = match solved {
+            Ok(info) => info,
+            Err(failed) => {
+                residual.clear();
+                return Err(failed);
+            }
+        };
+        residual.resize(x.len(), 0.0);
+        owned
+            .iter()
+            .zip(owned_residual.iter())
+            .for_each(|(&row, &r)| residual[row] = r);
         self.matrix.gather_selected(read_values)?;
-        let own = self.rows.owned.iter().zip(owned_x.iter());
+        let own = owned.iter().zip(owned_x.iter());
         own.chain(read.iter().zip(read_values.iter()))
             .for_each(|(&row, &value)| x[row] = value);
         Ok(SolveInfo {
@@ -535,7 +575,7 @@ impl RankKrylov {
         x: &mut [f64],
     ) -> Result<SolveInfo, LaError> {
         let kept = std::mem::replace(&mut self.params, *params);
-        let solved = self.solve(rhs, x);
+        let solved = self.solve(rhs, x, &mut Vec::new());
         self.params = kept;
         solved
     }
