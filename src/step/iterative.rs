@@ -477,8 +477,9 @@ impl Drop for StepWork<'_> {
 }
 
 /// Solves Ã x = b̃ by GMRES (GCR over the ranks) from x (`residual`: b̃ − Ã x on entry when it
-/// has n entries, and after; over the ranks at each rank's own rows), counts the solve from `clock` on, and returns its Krylov iterations. A solve at its
-/// cap is a step failure of the linear solve, with its residual history.
+/// has n entries, and after; over the ranks at each rank's own rows), counts the solve from
+/// `clock` on, and returns its Krylov iterations. A solve at its cap is a step failure of the
+/// linear solve, with its residual history.
 pub(super) fn krylov_solve(
     sys: &KrylovSystem,
     (a, solver): (&CsrMatrix, &mut KrylovSolver),

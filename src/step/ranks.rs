@@ -21,12 +21,12 @@
 //! [`RankKrylov::set_velocity_amg`]), from the previous iterate and its residual as the serial
 //! solves do: the rows of the residual that a linearization changes (Ã's Γ_C rows, and the
 //! contact nodes' temperature rows, whose right-hand side carries the frictional heat) are
-//! recomputed on every rank from the rows it keeps, the others are the last solve's. Each rank's unknowns are numbered in
-//! the system's order, so its block has its Γ_C rows last (then, with Schwarz, its overlap's
-//! rows) and its ILU(0) is the serial path's: single precision, refactored only from the first
-//! row a linearization changes ([`RankBlock`]). Of the solution each rank takes its own
-//! rows and gathers those the next linearization reads, the columns of Ã's Γ_C rows (the same
-//! on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
+//! recomputed on every rank from the rows it keeps, the others are the last solve's. Each
+//! rank's unknowns are numbered in the system's order, so its block has its Γ_C rows last
+//! (then, with Schwarz, its overlap's rows) and its ILU(0) is the serial path's: single
+//! precision, refactored only from the first row a linearization changes ([`RankBlock`]). Of
+//! the solution each rank takes its own rows and gathers those the next linearization reads,
+//! the columns of Ã's Γ_C rows (the same on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
 //! and the cutback decision are computed from the same numbers on every rank and agree without
 //! a reduction: the ranks take the same branches by construction. The whole solution is
 //! gathered once per step, for the state ([`RankKrylov::gather_whole`]).
