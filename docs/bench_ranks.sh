@@ -1,8 +1,9 @@
 #!/bin/bash
 # The 3D example (NX × NX/4 × NX/4 cells, STEPS steps of k = 1/64) on the iterative path: one
 # threaded process against `mpirun -n 2` with one thread per rank, two interleaved pairs
-# (docs/distributed.md, "Measured"). Needs a release build with `--features mpi`; B= names
-# another binary. Usage: bash docs/bench_ranks.sh NX STEPS   (98k: 72 8; 972k: 156 2)
+# (docs/distributed.md, "Measured"), and for each pair the parallel efficiency and the memory
+# ratio. Needs a release build with `--features mpi`; B= names another binary.
+# Usage: bash docs/bench_ranks.sh NX STEPS   (98k: 72 8; 972k: 156 2)
 set -u
 B=${B:-target/release/thermocontact}
 NX=$1; NY=$((NX / 4)); ST=$2; T=$(python3 -c "print($ST / 64)")
@@ -29,5 +30,14 @@ print(f"nx={nx} {label} set-up {t['assembly'] + t['factorization']:.2f} s, "
       f"peak RSS {int(rss) // 1024} MiB")
 PY
   done
+  python3 - "$DIR" <<'PY'
+import json, sys
+folder = sys.argv[1]
+step = {r: (lambda s: s["timings"]["time_stepping"] / s["steps"])(json.load(open(f"{folder}/{r}/summary.json")))
+        for r in ("one", "ranks")}
+rss = {r: int(open(f"{folder}/{r}.time").read().split()[-1]) for r in ("one", "ranks")}
+print(f"  pair: parallel efficiency {step['one'] / step['ranks']:.2f} (1 process's time per step over the "
+      f"2 ranks'), memory per rank {rss['ranks'] / rss['one']:.2f} of the 1 process's")
+PY
 done
 rm -rf "$DIR"
