@@ -671,31 +671,62 @@ int tc_dist_set_rhs(tc_dist *dist, long long n, const int *index, const double *
   PetscFunctionReturn(0);
 }
 
+/* This rank's entries of v from `from`, and into `to`. */
+static PetscErrorCode tc_vec_set_owned(Vec v, const double *from)
+{
+  PetscScalar *a;
+  PetscInt     n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(v, &n));
+  PetscCall(VecGetArrayWrite(v, &a));
+  memcpy(a, from, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayWrite(v, &a));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode tc_vec_get_owned(Vec v, double *to)
+{
+  const PetscScalar *a;
+  PetscInt           n;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(v, &n));
+  PetscCall(VecGetArrayRead(v, &a));
+  memcpy(to, a, (size_t)n * sizeof(double));
+  PetscCall(VecRestoreArrayRead(v, &a));
+  PetscFunctionReturn(0);
+}
+
+/* What the last solve did: its iterations, its final relative residual ||b − Ax|| / bnorm and
+ * its converged reason (> 0: converged). PETSc's GCR ends at its iteration cap with the
+ * positive KSP_CONVERGED_ITS: reported as KSP_DIVERGED_ITS, not converged. */
+static PetscErrorCode tc_dist_outcome(tc_dist *dist, PetscReal bnorm, int *iterations, double *residual, int *reason)
+{
+  PetscInt           its;
+  PetscReal          rnorm;
+  KSPConvergedReason why;
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetIterationNumber(dist->ksp, &its));
+  PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
+  PetscCall(KSPGetConvergedReason(dist->ksp, &why));
+  if (why == KSP_CONVERGED_ITS) why = KSP_DIVERGED_ITS;
+  *iterations = (int)its;
+  *residual   = bnorm > 0 ? rnorm / bnorm : rnorm;
+  *reason     = (int)why;
+  PetscFunctionReturn(0);
+}
+
 /* Solves A x = b from x = 0; the owned part of x into `owned` (n_owned values); iterations,
  * the final relative residual ‖b − Ax‖/‖b‖ and the converged reason (> 0: converged). */
 int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residual, int *reason)
 {
-  PetscInt           its, n;
-  PetscReal          rnorm, bnorm;
-  KSPConvergedReason why;
-  const PetscScalar *x;
+  PetscReal bnorm;
   PetscFunctionBeginUser;
   PetscCall(VecZeroEntries(dist->x));
   PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
   PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
-  PetscCall(KSPGetIterationNumber(dist->ksp, &its));
-  PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
-  PetscCall(KSPGetConvergedReason(dist->ksp, &why));
-  /* PETSc's GCR ends at its iteration cap with KSP_CONVERGED_ITS (positive): not converged. */
-  if (why == KSP_CONVERGED_ITS) why = KSP_DIVERGED_ITS;
   PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
-  PetscCall(VecGetLocalSize(dist->x, &n));
-  PetscCall(VecGetArrayRead(dist->x, &x));
-  memcpy(owned, x, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayRead(dist->x, &x));
-  *iterations = (int)its;
-  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
-  *reason = (int)why;
+  PetscCall(tc_dist_outcome(dist, bnorm, iterations, residual, reason));
+  PetscCall(tc_vec_get_owned(dist->x, owned));
   PetscFunctionReturn(0);
 }
 
@@ -713,32 +744,23 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, 
                        int (*block_apply)(void *, const double *, double *, int), void *block_ctx,
                        int *iterations, double *residual, int *reason)
 {
-  PetscInt           its, n;
-  PetscReal          rnorm, bnorm;
-  KSPConvergedReason why;
-  PetscScalar       *v;
-  const PetscScalar *x;
-  Vec                r;
+  PetscInt     n;
+  PetscReal    bnorm;
+  PetscScalar *v;
+  Vec          r;
   PetscFunctionBeginUser;
-  PetscCall(VecGetLocalSize(dist->b, &n));
-  PetscCall(VecGetArray(dist->b, &v));
-  memcpy(v, rhs, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArray(dist->b, &v));
+  PetscCall(tc_vec_set_owned(dist->b, rhs));
   PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
   /* A zero b leaves the tolerance on ||b|| at zero: solved from the guess, as before. */
   if (carried && bnorm > 0) {
-    PetscCall(VecGetArray(dist->b, &v));
-    memcpy(v, carried, (size_t)n * sizeof(double));
-    PetscCall(VecRestoreArray(dist->b, &v));
+    PetscCall(tc_vec_set_owned(dist->b, carried));
     PetscCall(VecZeroEntries(dist->x));
     PetscCall(PetscObjectStateGet((PetscObject)dist->x, &dist->x_zero_state));
     dist->x_zero_known = PETSC_TRUE;
     PetscCall(KSPSetTolerances(dist->ksp, 0.0, dist->rtol * bnorm, PETSC_DEFAULT, dist->max_its));
   } else {
     carried = NULL;
-    PetscCall(VecGetArray(dist->x, &v));
-    memcpy(v, owned, (size_t)n * sizeof(double));
-    PetscCall(VecRestoreArray(dist->x, &v));
+    PetscCall(tc_vec_set_owned(dist->x, owned));
     PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
   }
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
@@ -750,33 +772,23 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, 
   dist->x_zero_known = PETSC_FALSE;
   PetscCall(solved);
   PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
-  PetscCall(KSPGetIterationNumber(dist->ksp, &its));
-  PetscCall(KSPGetResidualNorm(dist->ksp, &rnorm));
-  PetscCall(KSPGetConvergedReason(dist->ksp, &why));
-  /* PETSc's GCR ends at its iteration cap with KSP_CONVERGED_ITS (positive): not converged. */
-  if (why == KSP_CONVERGED_ITS) why = KSP_DIVERGED_ITS;
+  PetscCall(tc_dist_outcome(dist, bnorm, iterations, residual, reason));
   if (carried) {
     /* x = guess + d, in the solver's x too: the gathers read the solution there. */
+    PetscCall(VecGetLocalSize(dist->x, &n));
     PetscCall(VecGetArray(dist->x, &v));
     for (PetscInt i = 0; i < n; ++i) v[i] += owned[i];
     PetscCall(VecRestoreArray(dist->x, &v));
   }
-  PetscCall(VecGetArrayRead(dist->x, &x));
-  memcpy(owned, x, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayRead(dist->x, &x));
+  PetscCall(tc_vec_get_owned(dist->x, owned));
   if (final_residual) {
     if (!dist->final_residual) {
       PetscCall(VecDuplicate(dist->b, &dist->final_residual));
       PetscCall(VecDuplicate(dist->b, &dist->work));
     }
     PetscCall(KSPBuildResidual(dist->ksp, dist->work, dist->final_residual, &r));
-    PetscCall(VecGetArrayRead(r, &x));
-    memcpy(final_residual, x, (size_t)n * sizeof(double));
-    PetscCall(VecRestoreArrayRead(r, &x));
+    PetscCall(tc_vec_get_owned(r, final_residual));
   }
-  *iterations = (int)its;
-  *residual = bnorm > 0 ? rnorm / bnorm : rnorm;
-  *reason = (int)why;
   PetscFunctionReturn(0);
 }
 
@@ -784,15 +796,10 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, 
  * collective. */
 static PetscErrorCode tc_dist_scatter_copy(tc_dist *dist, VecScatter scatter, Vec to, double *out)
 {
-  const PetscScalar *x;
-  PetscInt           n;
   PetscFunctionBeginUser;
   PetscCall(VecScatterBegin(scatter, dist->x, to, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecScatterEnd(scatter, dist->x, to, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecGetLocalSize(to, &n));
-  PetscCall(VecGetArrayRead(to, &x));
-  memcpy(out, x, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayRead(to, &x));
+  PetscCall(tc_vec_get_owned(to, out));
   PetscFunctionReturn(0);
 }
 
@@ -880,13 +887,8 @@ int tc_ghost_create(int n_owned, int n_ghost, const int *ghosts, Vec *out)
 /* The owned entries from `owned`, then every ghost from its owner (VecGhostUpdate, forward). */
 int tc_ghost_set_and_update(Vec v, const double *owned)
 {
-  PetscScalar *x;
-  PetscInt     n;
   PetscFunctionBeginUser;
-  PetscCall(VecGetLocalSize(v, &n));
-  PetscCall(VecGetArrayWrite(v, &x));
-  memcpy(x, owned, (size_t)n * sizeof(double));
-  PetscCall(VecRestoreArrayWrite(v, &x));
+  PetscCall(tc_vec_set_owned(v, owned));
   PetscCall(VecGhostUpdateBegin(v, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecGhostUpdateEnd(v, INSERT_VALUES, SCATTER_FORWARD));
   PetscFunctionReturn(0);

@@ -988,7 +988,7 @@ impl DistributedMatrix {
         &mut self,
         params: &DistributedKrylov,
         (rhs, x): (&[f64], &mut [f64]),
-        residual: Option<&mut Vec<f64>>,
+        mut residual: Option<&mut Vec<f64>>,
         block: Option<&dyn Preconditioner>,
     ) -> Result<DistributedSolveInfo, Error> {
         let n = self.owned.len();
@@ -1008,7 +1008,6 @@ impl DistributedMatrix {
             Some(block) => (Some(apply_block), (block as *mut &dyn Preconditioner).cast()),
             None => (None, std::ptr::null_mut()),
         };
-        let mut residual = residual;
         // One buffer for both: the C layer reads the carried residual before it writes the
         // final one.
         let (carried, out) = match residual.as_deref_mut() {

@@ -357,15 +357,8 @@ impl CsrMatrix {
         also.iter()
             .filter(|&&row| row < first)
             .for_each(|&row| kept[row] = true);
-        let start = self.ptr[first];
-        let before: usize = (0..first)
-            .filter(|&row| kept[row])
-            .map(|row| self.ptr[row + 1] - self.ptr[row])
-            .sum();
-        let (mut col, mut val) = (
-            Vec::with_capacity(before + self.nnz() - start),
-            Vec::with_capacity(before + self.nnz() - start),
-        );
+        let tail = self.nnz() - self.ptr[first];
+        let (mut col, mut val) = (Vec::with_capacity(tail), Vec::with_capacity(tail));
         let mut ptr = Vec::with_capacity(self.n + 1);
         ptr.push(0);
         for row in 0..self.n {

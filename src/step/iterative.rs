@@ -173,9 +173,10 @@ fn ilu_needs_amg(
 }
 
 /// The step matrix of step size k on this rank of a distributed run and its Krylov solver over
-/// the ranks: Ã's rows this rank owns handed to PETSc, and of Ã itself only the rows from
-/// `first_contact` on kept (those each linearization changes, on every rank), the rows before
-/// left empty; the preconditioner from `params.preconditioner`: for `ilu` restricted additive
+/// the ranks (the system's row of each unknown: `position`, the inverse of `order`): Ã's rows
+/// this rank owns handed to PETSc, and of Ã itself only the rows from `first_contact` on kept
+/// (those each linearization changes, on every rank) and the contact nodes' temperature rows,
+/// the others left empty; the preconditioner from `params.preconditioner`: for `ilu` restricted additive
 /// Schwarz with each rank's overlapped block's ILU(0) (block Jacobi with its own block's where
 /// `params.overlap` is 0), those sweeps around PETSc's GAMG on the velocity block for `amg`
 /// (the serial path's two-level method), and for `auto` the serial rule's probe with the `ilu`
@@ -185,7 +186,7 @@ fn ilu_needs_amg(
 fn ranks_system(
     problem: &Problem,
     k: f64,
-    (order, first_contact): (&[usize], usize),
+    (order, position, first_contact): (&[usize], &[usize], usize),
     params: &KrylovParams,
 ) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
     use super::ranks::{RankKrylov, RankRows};
@@ -207,12 +208,9 @@ fn ranks_system(
     // The contact nodes' temperature rows: a linearization changes their right-hand side (the
     // frictional heat), and the Newton method recomputes their residual from Ã's rows.
     let n_w = problem.velocity.n_free;
-    let mut position = vec![0; order.len()];
-    order.iter().enumerate().for_each(|(row, &u)| position[u] = row);
     let theta_rows: Vec<usize> = (problem.contact.iter())
         .filter_map(|node| node.theta_dof.map(|r| position[n_w + r]))
         .collect();
-    drop(position);
     let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &rows.assembled(first_contact, &theta_rows));
     let (mut ranks, a) = RankKrylov::new(
         rows,
@@ -243,7 +241,7 @@ fn ranks_system(
 fn ranks_system(
     _problem: &Problem,
     _k: f64,
-    _system: (&[usize], usize),
+    _system: (&[usize], &[usize], usize),
     _params: &KrylovParams,
 ) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
     Err(LaError::Petsc {
@@ -272,7 +270,7 @@ impl KrylovSystem {
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
 
         let (a, rhs, solver, amg) = if params.distributed {
-            let (a, rhs, solver) = ranks_system(problem, k, (&order, first_contact), &params)?;
+            let (a, rhs, solver) = ranks_system(problem, k, (&order, &position, first_contact), &params)?;
             (a, rhs, solver, None)
         } else {
             let (a, rhs) = ordered_rows(problem, k, &order);
