@@ -151,6 +151,11 @@ enum Command {
         /// is a property of the method rather than of the zone (docs/performance.md).
         #[arg(long)]
         friction_bound_3d: Option<f64>,
+        /// The 3D suite's iterative runs with their convexification iterates' bounds predicted
+        /// by this many nonlinear Gauss–Seidel sweeps over Γ_C (`solver.contact_sweeps`;
+        /// default: the scenario's 0, the paper's loop; docs/solvers.md).
+        #[arg(long)]
+        contact_sweeps_3d: Option<usize>,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -558,6 +563,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             coarse_k_cells,
             preconditioners,
             friction_bound_3d,
+            contact_sweeps_3d,
         } => {
             if three_d {
                 let suite = Suite3d {
@@ -567,9 +573,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     direct_up_to,
                     coarse_k_cells,
                     preconditioners,
-                    overrides: friction_bound_3d
-                        .map(|s| format!("friction.bound={s}"))
-                        .into_iter()
+                    overrides: (friction_bound_3d.map(|s| format!("friction.bound={s}")).into_iter())
+                        .chain(contact_sweeps_3d.map(|n| format!("solver.contact_sweeps={n}")))
                         .collect(),
                 };
                 bench_3d(&out, &suite)
@@ -1075,6 +1080,13 @@ fn print_summary(s: &Summary) {
             "{:<34} {:>12}",
             "iterates from Anderson (of all)",
             format!("{} ({})", s.anderson_combinations, s.convexification_iterations)
+        );
+    }
+    if s.predicted_iterates > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "iterates with predicted bounds",
+            format!("{} ({})", s.predicted_iterates, s.convexification_iterations)
         );
     }
     if s.exchange_iterations > 0 {

@@ -335,6 +335,28 @@ mod distributed {
         );
     }
 
+    /// The same with the loop's bounds predicted by a Gauss–Seidel sweep over Γ_C
+    /// (`solver.contact_sweeps`): every rank sweeps the same nodes from the same numbers.
+    #[test]
+    fn predicted_bounds_on_two_and_three_ranks_equal_one_process() {
+        agrees_over_ranks(
+            "paper3d-predicted",
+            &scenario_with(
+                "paper3d.toml",
+                &[
+                    "mesh.nx=16",
+                    "mesh.ny=4",
+                    "mesh.nz=4",
+                    "time.steps=8",
+                    "time.final_time=0.125",
+                    "output.times=[0.0625,0.125]",
+                    "solver.linear=\"iterative\"",
+                    "solver.contact_sweeps=1",
+                ],
+            ),
+        );
+    }
+
     /// The brake pad (a Gmsh mesh, a moving counter-face, friction from the contact pressure,
     /// thermal conditions): its stiffness weighs, so `auto` takes the two-level method (GAMG on
     /// the velocity block between the ranks' ILU(0) sweeps, as one process does), without which

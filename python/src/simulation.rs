@@ -258,6 +258,9 @@ pub struct PyStepInfo {
     /// Convexification iterates of the iterative path that started from an Anderson
     /// combination of the bounds (`solver.anderson_depth`).
     anderson_combinations: usize,
+    /// Convexification iterates of the iterative path whose bounds the Gauss–Seidel sweeps
+    /// over Γ_C predicted (`solver.contact_sweeps`).
+    predicted_iterates: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -280,6 +283,7 @@ impl From<StepInfo> for PyStepInfo {
             descent_sweeps: info.descent_sweeps,
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             anderson_combinations: info.anderson_combinations,
+            predicted_iterates: info.predicted_iterates,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             krylov_iterations: info.krylov_iterations,
@@ -307,6 +311,7 @@ impl PyStepInfo {
         d.set_item("descent_sweeps", self.descent_sweeps)?;
         d.set_item("nonmonotone_newton_iterations", self.nonmonotone_newton_iterations)?;
         d.set_item("anderson_combinations", self.anderson_combinations)?;
+        d.set_item("predicted_iterates", self.predicted_iterates)?;
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
         d.set_item("krylov_iterations", self.krylov_iterations)?;
@@ -317,8 +322,8 @@ impl PyStepInfo {
     fn __repr__(&self) -> String {
         format!(
             "StepInfo(convexification_iterations={}, inner_iterations={}, newton_iterations={}, fallback={}, \
-             descent_sweeps={}, nonmonotone_newton_iterations={}, anderson_combinations={}, substeps={}, \
-             cutback_depth={}, krylov_iterations={})",
+             descent_sweeps={}, nonmonotone_newton_iterations={}, anderson_combinations={}, predicted_iterates={}, \
+             substeps={}, cutback_depth={}, krylov_iterations={})",
             self.convexification_iterations,
             self.inner_iterations,
             self.newton_iterations,
@@ -326,6 +331,7 @@ impl PyStepInfo {
             self.descent_sweeps,
             self.nonmonotone_newton_iterations,
             self.anderson_combinations,
+            self.predicted_iterates,
             self.substeps,
             self.cutback_depth,
             self.krylov_iterations

@@ -105,6 +105,7 @@ class StepInfo:
     descent_sweeps: int
     nonmonotone_newton_iterations: int
     anderson_combinations: int
+    predicted_iterates: int
     substeps: int
     cutback_depth: int
     krylov_iterations: int

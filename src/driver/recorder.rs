@@ -136,6 +136,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             energy_residual: info.energy.relative_residual(),
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             anderson_combinations: info.anderson_combinations,
+            predicted_iterates: info.predicted_iterates,
             heat_residual: info.energy.relative_heat_residual(),
         };
         self.tally.add_step(info, step);
@@ -284,6 +285,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             nonmonotone_newton_steps: tally.nonmonotone_newton_steps,
             nonmonotone_newton_iterations: tally.nonmonotone_newton_iterations,
             anderson_combinations: tally.anderson_combinations,
+            predicted_iterates: tally.predicted_iterates,
             krylov_iterations: tally.krylov_iterations,
             linear: report.linear.name().to_string(),
             preconditioner: report.preconditioner.map(|p| p.name().to_string()),

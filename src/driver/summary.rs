@@ -122,6 +122,10 @@ pub struct Summary {
     /// combination of the bounds (`solver.anderson_depth`), over all steps.
     #[serde(default)]
     pub anderson_combinations: usize,
+    /// Convexification iterates of the iterative path whose bounds the Gauss–Seidel sweeps over
+    /// Γ_C predicted (`solver.contact_sweeps`), over all steps.
+    #[serde(default)]
+    pub predicted_iterates: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
     /// Over the whole run: a continued run adds its own to those of the parts before (their
@@ -429,6 +433,10 @@ pub struct StepRecord {
     /// ([`StepInfo::anderson_combinations`]).
     #[serde(default)]
     pub anderson_combinations: usize,
+    /// Convexification iterates whose bounds the sweeps over Γ_C predicted
+    /// ([`StepInfo::predicted_iterates`]).
+    #[serde(default)]
+    pub predicted_iterates: usize,
 }
 
 /// Increments not measured (and those of checkpoints written before steps.csv had them).
@@ -450,7 +458,7 @@ impl StepRecord {
     /// residuals relative to their balance's largest term (docs/energy.md); last, the iterations
     /// of the iterative path's way out where the convexification loop failed and the iterates
     /// its loop started from an Anderson combination.
-    pub const HEADER: [&'static str; 37] = [
+    pub const HEADER: [&'static str; 38] = [
         "n",
         "t",
         "convexification",
@@ -488,6 +496,7 @@ impl StepRecord {
         "heat_residual_rel",
         "nonmonotone_newton",
         "anderson",
+        "predicted",
     ];
 
     /// The record as a `steps.csv` row.
@@ -532,6 +541,7 @@ impl StepRecord {
             self.heat_residual,
             self.nonmonotone_newton_iterations as f64,
             self.anderson_combinations as f64,
+            self.predicted_iterates as f64,
         ]);
         row
     }
@@ -556,6 +566,8 @@ pub struct Tally {
     pub nonmonotone_newton_iterations: usize,
     #[serde(default)]
     pub anderson_combinations: usize,
+    #[serde(default)]
+    pub predicted_iterates: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
@@ -604,6 +616,7 @@ impl Tally {
         self.nonmonotone_newton_steps += usize::from(info.nonmonotone_newton_iterations > 0);
         self.nonmonotone_newton_iterations += info.nonmonotone_newton_iterations;
         self.anderson_combinations += info.anderson_combinations;
+        self.predicted_iterates += info.predicted_iterates;
         self.exchange_iterations += info.exchange_iterations;
         self.pressure_iterations += info.pressure_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);

@@ -647,6 +647,7 @@ impl Scenario {
                 ..KrylovParams::default()
             },
             anderson_depth: s.anderson_depth,
+            contact_sweeps: s.contact_sweeps,
         }
     }
 

@@ -644,6 +644,7 @@ pub struct SolverSpec {
     pub preconditioner: PreconditionerKind,
     pub overlap: usize,
     pub anderson_depth: usize,
+    pub contact_sweeps: usize,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

@@ -15,6 +15,10 @@ pub const MAX_CUTBACK_DEPTH: usize = 20;
 /// iterates (depth 2 and 3 took the same iterations on the 3D example, `step::anderson`).
 pub const MAX_ANDERSON_DEPTH: usize = 8;
 
+/// The most Gauss–Seidel sweeps over Γ_C `solver.contact_sweeps` takes (one predicts as well as
+/// two on the 3D example: 20 and 19 Newton iterations over 4 steps at 291k unknowns).
+pub const MAX_CONTACT_SWEEPS: usize = 8;
+
 /// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
 /// right-hand side multiplied by others (ρ/k, k·E, lengths to the power d); beyond this the
 /// products overflow or swamp each other and the step matrix turns singular in floating point.
@@ -295,6 +299,13 @@ impl Scenario {
                 "solver.anderson_depth",
                 &s.anderson_depth,
                 &format!("at most {MAX_ANDERSON_DEPTH} (0 turns the acceleration off)"),
+            ));
+        }
+        if s.contact_sweeps > MAX_CONTACT_SWEEPS {
+            return Err(invalid(
+                "solver.contact_sweeps",
+                &s.contact_sweeps,
+                &format!("at most {MAX_CONTACT_SWEEPS} (0: the paper's loop, without predicted bounds)"),
             ));
         }
         if s.overlap > MAX_OVERLAP {

@@ -435,6 +435,10 @@ pub struct SolverParams {
     /// Depth of the Anderson acceleration of the iterative path's convexification loop in its
     /// linear tail (`anderson::TailAnderson`; 0: off).
     pub anderson_depth: usize,
+    /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate of the
+    /// iterative path's convexification loop after its first (0: the paper's loop; another
+    /// rule where a step has several solutions: docs/solvers.md).
+    pub contact_sweeps: usize,
 }
 
 impl SolverParams {
@@ -461,6 +465,7 @@ impl Default for SolverParams {
             linear: LinearKind::Auto,
             krylov: KrylovParams::default(),
             anderson_depth: 2,
+            contact_sweeps: 0,
         }
     }
 }
@@ -489,6 +494,9 @@ pub struct StepInfo {
     /// Convexification iterates of the iterative path that started from an Anderson
     /// combination of the bounds (`solver.anderson_depth`).
     pub anderson_combinations: usize,
+    /// Convexification iterates of the iterative path whose bounds the Gauss–Seidel sweeps over
+    /// Γ_C predicted (`solver.contact_sweeps`).
+    pub predicted_iterates: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -514,6 +522,7 @@ impl StepInfo {
         self.descent_sweeps += other.descent_sweeps;
         self.nonmonotone_newton_iterations += other.nonmonotone_newton_iterations;
         self.anderson_combinations += other.anderson_combinations;
+        self.predicted_iterates += other.predicted_iterates;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;

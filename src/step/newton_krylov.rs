@@ -36,6 +36,36 @@
 //! resolves: 16.5 → 13.75 Newton iterations per step at 1.05M unknowns), the plain loop where
 //! it is short (the example's own S = 150, whose tails converge 50–100× per iterate).
 //!
+//! **Predicted bounds (`solver.contact_sweeps`, off by default).** The loop's iterates follow
+//! the slip front (below): a node that starts slipping keeps the bound of its last slip for
+//! the whole iterate, and its neighbours feel it only in the next, so the zone spreads and
+//! deepens about one ring per iterate. From a step's second iterate on, the bounds may instead
+//! be frozen at the slip that nonlinear Gauss–Seidel sweeps over Γ_C predict
+//! ([`Linearization::gauss_seidel_slip`]): each contact node's tangential rows of A solved with
+//! the law itself, every other unknown at its latest value, the node's slip the local minimizer
+//! reached downhill from its current one (the descent's nodal search,
+//! [`super::descent::radial_minimizer`]). A node that starts slipping weakens within the sweep,
+//! and the nodes swept after it see its new slip: the front moves many rings per iterate. The
+//! sweep is a pass over Γ_C's rows (no solve); a solution of the law whose nodal slips are local
+//! minimizers of their nodal problems is a fixed point of it, and the stop test is the loop's,
+//! so every returned step solves the same equations to the same tolerance. Measured on
+//! the 3D example at k = 1/64, 4 steps, one sweep: 5.75 → 5.0 Newton iterations per step at
+//! 47k unknowns, 6.75 → 5.5 at 98k, 9.5 → 6.75 at 291k, 16 → 8.0 at 972k (Krylov 303 → 163,
+//! 3.41–3.66 → 2.03–2.10 s per step), the same slip counts, contact fields within 1.7·10⁻⁷; at
+//! 972k and k = 1/8 the first step 73 → 44 Newton iterations, the same 1 386 slipping nodes.
+//! Two sweeps: 5.75 at 291k, 8.0 at 972k; four: 5.5 at 291k. It is a choice
+//! because where a step has several solutions it may reach another than the loop: on the
+//! 3D example at 17k unknowns from step 12 on (1 258 → 422 Newton iterations over 64 steps),
+//! on its coarse 12 × 3 × 3 version at one step of 16, where the loop first approaches a
+//! solution and then leaves it for another, and the predicted bounds stay at the first. Tried
+//! with it: the first iterate predicted too (from the previous step's state, whose Γ_C rows do
+//! not hold the step's equations: 6.75 instead of 8.0 Newton iterations per step at 972k, but
+//! the 2D example 32 × 8 then reaches another solution, which it does not otherwise); the bound frozen within the sweep (a Tresca sweep, then the bounds of
+//! its slip; measured with the first iterate predicted too: another solution on the coarse 2D and 3D cases, and 54.75 outer iterations per
+//! step on the S = 8 case at nx = 32); only nodes already slipping predicted (the same result
+//! as all nodes on the coarse 3D case); the prediction only after 3, 6 or 10 plain iterates
+//! (the 17k example still parts from the loop at steps 12, 48 and 48).
+//!
 //! **Where the loop fails: Newton on the nonmonotone law.** The direct path descends on the
 //! condensed step's energy where its loop fails ([`super::descent`]); that needs the dense
 //! K = C⁻¹ on Γ_C, which this path does not have. Here the same semismooth Newton iterations
@@ -252,6 +282,76 @@ impl Linearization<'_> {
             .collect()
     }
 
+    /// The slip that `sweeps` nonlinear Gauss–Seidel sweeps over the contact nodes predict
+    /// from the iterate (x, w): node by node, in Γ_C's order, the node's tangential rows of A
+    /// with every other unknown at its latest value (the nodes before it at their new ones, the
+    /// rest of x frozen) and the friction law itself, −ξ_i = b_i(|z_i|) z_i/|z_i| for the
+    /// relative slip z_i = w_i − v_F,i: with κ the mean of the node's diagonal entries (its
+    /// off-diagonal block taken at the current w_i), z_i ∥ σ_i and |z_i| is the nodal
+    /// problem's local minimizer κ s + ℓ_i b_i(s) = |σ_i| reached downhill from the current
+    /// slip ([`super::descent::radial_minimizer`]). Returns the predicted relative slip,
+    /// node-major as w.
+    fn gauss_seidel_slip(&self, x: &[f64], w: &[f64], sweeps: usize) -> Vec<f64> {
+        let sys = self.system;
+        let (td, first) = (self.td, sys.first_contact);
+        let a = &*self.a;
+        // The Γ_C tangential velocities, updated node by node; every other unknown stays.
+        let mut contact = x[first..].to_vec();
+        let mut slip = w.to_vec();
+        for _ in 0..sweeps {
+            for (i, node) in sys.nodes.iter().enumerate() {
+                let m = node.tangent.len();
+                if m == 0 {
+                    continue;
+                }
+                // s = b − (A x without the node's own block), the block, w_i and v_F,i.
+                let (mut s, mut block, mut wi, mut v) = ([0.0; 2], [[0.0; 2]; 2], [0.0; 2], [0.0; 2]);
+                for (j, &(k, row)) in node.tangent.iter().enumerate() {
+                    let values = &sys.base[a.offset_from(first, row)];
+                    let mut sum = self.b[row];
+                    for (&col, &value) in a.row(row).0.iter().zip(values) {
+                        let col = col as usize;
+                        match node.tangent.iter().position(|&(_, r)| r == col) {
+                            Some(l) => block[j][l] = value,
+                            None if col >= first => sum -= value * contact[col - first],
+                            None => sum -= value * x[col],
+                        }
+                    }
+                    s[j] = sum;
+                    wi[j] = contact[row - first];
+                    v[j] = self.laws.foundation().map_or(0.0, |f| f[i * td + k]);
+                }
+                let kappa = (0..m).map(|j| block[j][j]).sum::<f64>() / m as f64;
+                let (mut sigma, mut z) = ([0.0; 2], [0.0; 2]);
+                for j in 0..m {
+                    let off_kappa: f64 = (0..m)
+                        .map(|l| (block[j][l] - if j == l { kappa } else { 0.0 }) * wi[l])
+                        .sum();
+                    sigma[j] = s[j] - off_kappa - kappa * v[j];
+                    z[j] = wi[j] - v[j];
+                }
+                let sigma_norm = norm(&sigma[..m]);
+                let radius = super::descent::radial_minimizer(
+                    |r| self.laws.bound(i, r),
+                    kappa,
+                    node.weight,
+                    sigma_norm / kappa,
+                    norm(&z[..m]),
+                );
+                for (j, &(k, row)) in node.tangent.iter().enumerate() {
+                    let zj = if sigma_norm > 0.0 {
+                        radius * sigma[j] / sigma_norm
+                    } else {
+                        0.0
+                    };
+                    contact[row - first] = v[j] + zj;
+                    slip[i * td + k] = zj;
+                }
+            }
+        }
+        slip
+    }
+
     /// One Newton iteration of the convex problem with the bounds `frozen`, from (w, ξ) (x the
     /// unknowns they come from, updated in place): linearize, solve Ã x = b̃ by GMRES from x,
     /// and return the new (w, ξ).
@@ -383,6 +483,9 @@ pub struct NewtonKrylov<'a> {
     max_iterations: usize,
     /// Depth of the Anderson acceleration of the loop's tail ([`TailAnderson`]; 0: off).
     anderson_depth: usize,
+    /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the
+    /// first (`solver.contact_sweeps`; 0: the paper's loop).
+    contact_sweeps: usize,
 }
 
 impl<'a> NewtonKrylov<'a> {
@@ -393,13 +496,14 @@ impl<'a> NewtonKrylov<'a> {
 
     /// The solver of `problem` on `system`, stopping at `tolerance` (ε_conv) within
     /// `max_iterations` Newton iterations per step, its loop's tail accelerated by Anderson's
-    /// method of `anderson_depth` (0: not).
+    /// method of `anderson_depth` (0: not), its iterates' bounds predicted by `contact_sweeps`
+    /// nonlinear Gauss–Seidel sweeps over Γ_C (0: not).
     pub fn new(
         problem: &'a Problem,
         system: KrylovSystem,
         tolerance: f64,
         max_iterations: usize,
-        anderson_depth: usize,
+        (anderson_depth, contact_sweeps): (usize, usize),
     ) -> Self {
         NewtonKrylov {
             problem,
@@ -407,6 +511,7 @@ impl<'a> NewtonKrylov<'a> {
             tolerance,
             max_iterations,
             anderson_depth,
+            contact_sweeps,
         }
     }
 
@@ -632,14 +737,25 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
     /// max |Δξ| / max g, and the nonmonotone law relative to the smallest bound.
     fn solve(
         &mut self,
-        _m: usize,
+        m: usize,
         iterate: &mut AllUnknowns,
         inner_tolerance: f64,
         info: &mut StepInfo,
     ) -> Result<Vec<(Criterion, f64, f64)>, SolveError> {
         let solver = self.solver;
         let laws = self.linearization.laws;
-        let frozen = (self.anderson.take_bounds()).unwrap_or_else(|| laws.bounds(&iterate.w));
+        // From the loop's second iterate on (the first starts from the previous step, whose
+        // Γ_C rows do not hold this step's equations), the bounds of the slip that nonlinear
+        // Gauss–Seidel sweeps over Γ_C predict, where `solver.contact_sweeps` asks for them.
+        let sweeps = if m > 1 { solver.contact_sweeps } else { 0 };
+        let frozen = match self.anderson.take_bounds() {
+            Some(bounds) => bounds,
+            None if sweeps > 0 => {
+                info.predicted_iterates += 1;
+                laws.bounds(&self.linearization.gauss_seidel_slip(&iterate.x, &iterate.w, sweeps))
+            }
+            None => laws.bounds(&iterate.w),
+        };
         let g_scale = frozen.iter().fold(0.0f64, |s, v| s.max(*v)).max(f64::MIN_POSITIVE);
         let (w_outer, xi_outer) = (iterate.w.clone(), iterate.xi.clone());
         self.inner_converged = false;
