@@ -228,6 +228,19 @@ pub fn hard_cases() -> Vec<HardCase> {
                 "solver.linear=iterative",
             ],
         ),
+        case(
+            "3d-predicted",
+            "the same with the loop's bounds predicted by a sweep over Γ_C (solver.contact_sweeps = 1)",
+            Some("scenarios/paper3d.toml"),
+            &[
+                "mesh.nx=56",
+                "mesh.ny=14",
+                "mesh.nz=14",
+                "time.steps=8",
+                "solver.linear=iterative",
+                "solver.contact_sweeps=1",
+            ],
+        ),
     ]
 }
 
