@@ -171,6 +171,7 @@ pub fn hard_cases() -> Vec<HardCase> {
     };
     let long = ["time.final_time=3.0", "time.steps=192"];
     let steep = ["friction.alpha=1000.0", "friction.b=0.05"];
+    let cells = ["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8"];
     vec![
         case(
             "long-fast",
@@ -208,35 +209,23 @@ pub fn hard_cases() -> Vec<HardCase> {
             "3d-56x14x14",
             "3D example on 56 × 14 × 14 cells (47k unknowns), k = 1/8, direct path",
             Some("scenarios/paper3d.toml"),
-            &[
-                "mesh.nx=56",
-                "mesh.ny=14",
-                "mesh.nz=14",
-                "time.steps=8",
-                "solver.linear=direct",
-            ],
+            &[cells[0], cells[1], cells[2], cells[3], "solver.linear=direct"],
         ),
         case(
             "3d-iterative",
             "the same on the iterative path (Newton–Krylov; where the loop fails, Newton on the law)",
             Some("scenarios/paper3d.toml"),
-            &[
-                "mesh.nx=56",
-                "mesh.ny=14",
-                "mesh.nz=14",
-                "time.steps=8",
-                "solver.linear=iterative",
-            ],
+            &[cells[0], cells[1], cells[2], cells[3], "solver.linear=iterative"],
         ),
         case(
             "3d-predicted",
             "the same with the loop's bounds predicted by a sweep over Γ_C (solver.contact_sweeps = 1)",
             Some("scenarios/paper3d.toml"),
             &[
-                "mesh.nx=56",
-                "mesh.ny=14",
-                "mesh.nz=14",
-                "time.steps=8",
+                cells[0],
+                cells[1],
+                cells[2],
+                cells[3],
                 "solver.linear=iterative",
                 "solver.contact_sweeps=1",
             ],
