@@ -245,6 +245,18 @@ def test_step_by_step_equals_a_full_run(coarse):
     ]
 
 
+def test_predicted_bounds_are_counted_step_by_step(coarse):
+    # solver.contact_sweeps on the iterative path: each step reports its iterates with predicted
+    # bounds, and they sum to the summary's; the plain loop predicts none.
+    coarse.update({"solver.linear": "iterative", "solver.contact_sweeps": 1})
+    states = list(tc.Simulation(coarse).steps())
+    predicted = sum(s.info.predicted_iterates for s in states)
+    assert predicted > 0 and predicted == sum(s.info.to_dict()["predicted_iterates"] for s in states)
+    assert predicted < sum(s.info.convexification_iterations for s in states)
+    coarse["solver.contact_sweeps"] = 0
+    assert all(s.info.predicted_iterates == 0 for s in tc.Simulation(coarse).steps())
+
+
 def test_breaking_out_of_steps_stops_the_time_loop():
     # 4000 steps: minutes if the loop went on; a break must stop it within a step.
     sim = tc.Simulation(tc.Scenario(overrides={**COARSE, "time.steps": 4000, "output.times": [1.0]}))
