@@ -360,7 +360,25 @@ mod distributed {
             .solve_from(&params, (&doubled, &mut v), Some(&mut carried), Some(&block))
             .unwrap();
         let half: Vec<f64> = v.iter().map(|v| v / 2.0).collect();
-        assert_exact(owned, &half, h, "the carried residual's solve, halved");
+        assert_exact(owned.clone(), &half, h, "the carried residual's solve, halved");
+        // An inexact Newton iteration's solve (forcing η = 0.1) of the doubled system from
+        // x₀ = 2(1 − ε)u, whose residual r₀ = 2εh 1 + 2(1 − ε) r is ε = 10⁻³ of b: it must
+        // iterate (‖r₀‖ > η ‖r₀‖, however small r₀ is against b) and stop at ‖b − A x‖ ≤ η ‖r₀‖,
+        // with r₀ given and without (PETSc's own relative test from a guess is on ‖b‖: it
+        // would stop at once here).
+        let eps = 1e-3;
+        let start: Vec<f64> = u.iter().map(|u| 2.0 * (1.0 - eps) * u).collect();
+        let r0: Vec<f64> = residual.iter().map(|r| 2.0 * eps * h + 2.0 * (1.0 - eps) * r).collect();
+        for given in [true, false] {
+            let mut x = start.clone();
+            let mut carried = if given { r0.clone() } else { Vec::new() };
+            let info = (matrix.solve_from_inexact(&params, (&doubled, &mut x), Some(&mut carried), Some(&block), 0.1))
+                .unwrap();
+            assert!(
+                info.iterations >= 1 && info.residual <= 0.1 * eps * (1.0 + 1e-6),
+                "r₀ given: {given}, {info:?}"
+            );
+        }
         // The solve trusts the residual it is given: zero says u solves the doubled system, and
         // u stays (so the one above started from the residual, not from a product).
         let mut trusted = vec![0.0; n_owned];

@@ -122,6 +122,7 @@ extern "C" {
         final_residual: *mut c_double,
         block_apply: Option<BlockApply>,
         block_ctx: *mut c_void,
+        forcing: c_double,
         iterations: *mut c_int,
         residual: *mut c_double,
         reason: *mut c_int,
@@ -988,8 +989,22 @@ impl DistributedMatrix {
         &mut self,
         params: &DistributedKrylov,
         (rhs, x): (&[f64], &mut [f64]),
+        residual: Option<&mut Vec<f64>>,
+        block: Option<&dyn Preconditioner>,
+    ) -> Result<DistributedSolveInfo, Error> {
+        self.solve_from_inexact(params, (rhs, x), residual, block, 0.0)
+    }
+
+    /// [`DistributedMatrix::solve_from`] for a Newton iteration's correction: it also stops once
+    /// ‖b − A x‖ ≤ `forcing` ‖b − A x₀‖ (x₀ the guess), the looser of that and rtol ‖b‖, as the
+    /// serial [`Gmres::solve_inexact`](super::Gmres::solve_inexact).
+    pub fn solve_from_inexact(
+        &mut self,
+        params: &DistributedKrylov,
+        (rhs, x): (&[f64], &mut [f64]),
         mut residual: Option<&mut Vec<f64>>,
         block: Option<&dyn Preconditioner>,
+        forcing: f64,
     ) -> Result<DistributedSolveInfo, Error> {
         let n = self.owned.len();
         assert!(rhs.len() == n && x.len() == n, "the owned entries");
@@ -1031,6 +1046,7 @@ impl DistributedMatrix {
                 out,
                 apply,
                 ctx,
+                forcing,
                 &mut iterations,
                 &mut relative,
                 &mut reason,
