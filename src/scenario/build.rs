@@ -641,6 +641,7 @@ impl Scenario {
             linear: s.linear,
             krylov: KrylovParams {
                 rtol: s.krylov_tolerance,
+                forcing: s.krylov_forcing,
                 max_iterations: s.max_krylov,
                 preconditioner: s.preconditioner,
                 overlap: s.overlap,

@@ -640,6 +640,7 @@ pub struct SolverSpec {
     pub slip_tolerance: f64,
     pub linear: LinearKind,
     pub krylov_tolerance: f64,
+    pub krylov_forcing: f64,
     pub max_krylov: usize,
     pub preconditioner: PreconditionerKind,
     pub overlap: usize,

@@ -294,6 +294,13 @@ impl Scenario {
                 "a relative residual in (0, 1)",
             ));
         }
+        if !(s.krylov_forcing >= 0.0 && s.krylov_forcing < 1.0) {
+            return Err(invalid(
+                "solver.krylov_forcing",
+                &s.krylov_forcing,
+                "a fraction in [0, 1) of the residual a Newton iteration's solve starts from (0: every solve to solver.krylov_tolerance)",
+            ));
+        }
         at_least_one("solver.max_krylov", s.max_krylov)?;
         if s.anderson_depth > MAX_ANDERSON_DEPTH {
             return Err(invalid(

@@ -62,6 +62,10 @@ pub struct KrylovSystem {
     /// The contact rows' values of A, rows `first_contact..n` one after the other
     /// ([`CsrMatrix::values_from`]).
     pub(super) base: Vec<f64>,
+    /// The Krylov solves' relative tolerance ([`KrylovParams::rtol`]).
+    pub(super) rtol: f64,
+    /// The Newton solves' forcing term ([`KrylovParams::forcing`]).
+    pub(super) forcing: f64,
     /// Ã and its Krylov solver, changed in the contact rows by each linearization.
     work: Mutex<(CsrMatrix, KrylovSolver)>,
     /// The AMG coarse correction of the velocities, where the preconditioner has one (`amg`, or
@@ -314,6 +318,8 @@ impl KrylovSystem {
             first_contact,
             nodes,
             base,
+            rtol: params.rtol,
+            forcing: params.forcing,
             work: Mutex::new((a, solver)),
             amg,
             stats: Mutex::new(SystemStats::default()),
@@ -358,20 +364,23 @@ impl KrylovSystem {
     }
 
     /// Solves Ã x = b̃ by GMRES from x with this system's preconditioner (see
-    /// [`Gmres::solve`] for `residual`).
+    /// [`Gmres::solve_inexact`] for `residual` and `forcing`; 0: to the system's rtol).
     pub(super) fn gmres(
         &self,
         (a, solver): (&CsrMatrix, &mut KrylovSolver),
         rhs: &[f64],
         x: &mut [f64],
         residual: &mut Vec<f64>,
+        forcing: f64,
     ) -> Result<SolveInfo, LaError> {
         match (solver, &self.amg) {
-            (KrylovSolver::Process { ilu, gmres }, None) => gmres.solve(a, &*ilu, rhs, x, residual),
-            (KrylovSolver::Process { ilu, gmres }, Some(amg)) => gmres.solve(a, &amg.with(a, ilu), rhs, x, residual),
+            (KrylovSolver::Process { ilu, gmres }, None) => gmres.solve_inexact(a, &*ilu, rhs, x, residual, forcing),
+            (KrylovSolver::Process { ilu, gmres }, Some(amg)) => {
+                gmres.solve_inexact(a, &amg.with(a, ilu), rhs, x, residual, forcing)
+            }
             // At this rank's own rows (`RankKrylov::solve`).
             #[cfg(feature = "mpi")]
-            (KrylovSolver::Ranks(ranks), _) => ranks.solve(rhs, x, residual),
+            (KrylovSolver::Ranks(ranks), _) => ranks.solve(rhs, x, residual, forcing),
         }
     }
 
@@ -425,7 +434,7 @@ impl KrylovSystem {
         solver.update(a, self.first_contact)?;
         let b_ordered: Vec<f64> = self.order.iter().map(|&o| b[o]).collect();
         let mut x_ordered: Vec<f64> = self.order.iter().map(|&o| x[o]).collect();
-        let info = self.gmres((a, solver), &b_ordered, &mut x_ordered, &mut Vec::new())?;
+        let info = self.gmres((a, solver), &b_ordered, &mut x_ordered, &mut Vec::new(), 0.0)?;
         self.order.iter().zip(&x_ordered).for_each(|(&o, v)| x[o] = *v);
         Ok(info)
     }
@@ -475,23 +484,25 @@ impl Drop for StepWork<'_> {
 }
 
 /// Solves Ã x = b̃ by GMRES (GCR over the ranks) from x (`residual`: b̃ − Ã x on entry when it
-/// has n entries, and after; over the ranks at each rank's own rows), counts the solve from
-/// `clock` on, and returns its Krylov iterations. A solve at its cap is a step failure of the
-/// linear solve, with its residual history.
+/// has n entries, and after; over the ranks at each rank's own rows) to the system's rtol or,
+/// if looser, `forcing` times the residual it starts from (a Newton correction's forcing term,
+/// [`Gmres::solve_inexact`]; 0: rtol), counts the solve from `clock` on, and returns its Krylov
+/// iterations and whether it reached rtol. A solve at its cap is a step failure of the linear
+/// solve, with its residual history.
 pub(super) fn krylov_solve(
     sys: &KrylovSystem,
     (a, solver): (&CsrMatrix, &mut KrylovSolver),
-    rhs: &[f64],
+    (rhs, forcing): (&[f64], f64),
     x: &mut [f64],
     residual: &mut Vec<f64>,
     clock: Instant,
-) -> Result<usize, SolveError> {
+) -> Result<(usize, bool), SolveError> {
     let loop_name = match solver {
         KrylovSolver::Process { .. } => "GMRES",
         #[cfg(feature = "mpi")]
         KrylovSolver::Ranks(_) => "GCR",
     };
-    let solved = sys.gmres((a, solver), rhs, x, residual);
+    let solved = sys.gmres((a, solver), rhs, x, residual, forcing);
     sys.count(|s| {
         s.solves += 1;
         // A solve at its cap did its iterations too.
@@ -503,7 +514,7 @@ pub(super) fn krylov_solve(
         s.solve_seconds += clock.elapsed().as_secs_f64();
     });
     match solved {
-        Ok(solve) => Ok(solve.iterations),
+        Ok(solve) => Ok((solve.iterations, forcing == 0.0 || solve.residual <= sys.rtol)),
         Err(LaError::KrylovNotConverged {
             iterations,
             rtol,

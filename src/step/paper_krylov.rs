@@ -151,14 +151,15 @@ impl KrylovStep<'_> {
         change.iter_mut().zip(&self.rhs).for_each(|(c, new)| *c += new);
         self.y.fill(0.0);
         self.residual.clone_from(change);
-        self.krylov_iterations += krylov_solve(
+        let (iterations, _) = krylov_solve(
             sys,
             (self.a, self.solver),
-            change,
+            (change, 0.0),
             &mut self.y,
             &mut self.residual,
             clock,
         )?;
+        self.krylov_iterations += iterations;
         // The state reads every row of the sum (over the ranks: gathered whole).
         self.system.whole(self.solver, &mut self.y)?;
         self.x.iter_mut().zip(&self.y).for_each(|(x, y)| *x += y);
@@ -210,7 +211,7 @@ pub(super) fn spectral_bound_within(
             }
         }
         residual.clear();
-        sys.gmres((a, &mut *solver), &rhs, &mut x, &mut residual)?;
+        sys.gmres((a, &mut *solver), &rhs, &mut x, &mut residual, 0.0)?;
         y.copy_from_slice(&tangential(&sys.nodes, td, &x, y.len()));
         Ok(())
     })

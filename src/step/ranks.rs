@@ -515,7 +515,15 @@ impl RankKrylov {
     /// which the solve starts from instead of a product with Ã (a caller recomputes it where a
     /// linearization changed Ã or b̃: Ã's kept rows, [`RankKrylov::new`]); left with n entries
     /// holding the solution's residual there (PETSc's GCR keeps it), or empty after a failure.
-    pub(crate) fn solve(&mut self, rhs: &[f64], x: &mut [f64], residual: &mut Vec<f64>) -> Result<SolveInfo, LaError> {
+    /// `forcing`: the inexact Newton forcing term of
+    /// [`DistributedMatrix::solve_from_inexact`](crate::la::mpi::DistributedMatrix::solve_from_inexact) (0: to rtol).
+    pub(crate) fn solve(
+        &mut self,
+        rhs: &[f64],
+        x: &mut [f64],
+        residual: &mut Vec<f64>,
+        forcing: f64,
+    ) -> Result<SolveInfo, LaError> {
         let SolveExchange {
             owned_rhs,
             owned_x,
@@ -533,7 +541,8 @@ impl RankKrylov {
             owned_residual.extend(owned.iter().map(|&row| residual[row]));
         }
         let block = self.block.as_ref().map(|b| &b.ilu as &dyn Preconditioner);
-        let solved = (self.matrix).solve_from(&self.params, (owned_rhs, owned_x), Some(owned_residual), block);
+        let solved =
+            (self.matrix).solve_from_inexact(&self.params, (owned_rhs, owned_x), Some(owned_residual), block, forcing);
         // Every rank reaches here with the same outcome (PETSc's reason is collective).
         let info = match solved {
             Ok(info) => info,
@@ -575,7 +584,7 @@ impl RankKrylov {
         x: &mut [f64],
     ) -> Result<SolveInfo, LaError> {
         let kept = std::mem::replace(&mut self.params, *params);
-        let solved = self.solve(rhs, x, &mut Vec::new());
+        let solved = self.solve(rhs, x, &mut Vec::new(), 0.0);
         self.params = kept;
         solved
     }
