@@ -73,8 +73,8 @@ pub struct KrylovParams {
     pub rtol: f64,
     /// The Newton–Krylov solver's forcing term η: each Newton iteration's solve also stops
     /// once ‖b̃ − Ã x‖ ≤ η ‖b̃ − Ã x₀‖ from the last iterate x₀ (the looser of that and rtol;
-    /// [`crate::la::Gmres::solve_inexact`]); 0: every solve to rtol. Default
-    /// [`KrylovParams::NEWTON_FORCING`].
+    /// [`crate::la::Gmres::solve_inexact`]; `step::newton_krylov`); 0: every solve to rtol.
+    /// Default [`KrylovParams::NEWTON_FORCING`].
     pub forcing: f64,
     /// Iteration cap (products with A).
     pub max_iterations: usize,
@@ -153,16 +153,14 @@ impl Default for KrylovParams {
 }
 
 impl KrylovParams {
-    /// The default forcing term η of the Newton iterations' solves. Measured on the iterative
-    /// path against η = 0 (every solve to rtol, the builds before): the 3D example at 17k
-    /// unknowns, 64 steps, 3 715 → 2 108 Krylov iterations (1 258 → 1 259 Newton), at 972k, 4
-    /// steps, 303 → 121, and at 47k with k = 1/8, 8 steps, 7 306 → 1 814 (646 → 652 Newton),
-    /// each with the same slip counts at every step and the contact fields within 4·10⁻⁷. With
-    /// η = 0.01 the saving is smaller (2 219 and 2 302 on the first and the last); with η = 0.1
-    /// the loop takes longer paths where the step has several solutions (the 17k example with
-    /// `solver.contact_sweeps = 1`: 422 → 729 Newton iterations and a step left to Newton on
-    /// the law; one slip count apart at k = 1/8). docs/performance.md has the table.
-    pub const NEWTON_FORCING: f64 = 0.03;
+    /// The default forcing term of the Newton–Krylov solver's solves. Measured on the
+    /// iterative path against 0 (every solve to rtol, the builds before): the 3D example at
+    /// 972k unknowns, 4 steps, 303 → 149 Krylov iterations (the same 64 Newton iterations), at
+    /// 47k with k = 1/8, 8 steps, 7 306 → 2 302, the same slip counts at every step and the
+    /// contact fields within 2·10⁻⁷. 0.03 saves more there (121, 1 814) but costs the brake pad
+    /// a Newton iteration per pressure iterate and ends its last step at another solution;
+    /// docs/performance.md has the tables.
+    pub const NEWTON_FORCING: f64 = 0.01;
 
     /// The GMRES settings of these.
     pub fn gmres(&self) -> GmresParams {

@@ -73,7 +73,7 @@
 //! (`scenarios/pad3d.toml`, several solutions per step) parts from the paper's loop at 11 of its
 //! 32 steps instead of 2.
 //!
-//! **Inexact Newton solves (`solver.krylov_forcing`, default 0.03).** Each Newton iteration's
+//! **Inexact Newton solves (`solver.krylov_forcing`, default 0.01).** Each Newton iteration's
 //! Krylov solve starts from the last iterate with its residual carried (only Γ_C's rows and the
 //! contact nodes' temperature rows changed), and that residual is the nonlinear residual of the
 //! step's equations there. Solving the correction to rtol while that residual is large buys
@@ -81,23 +81,37 @@
 //! the one it starts from, the looser of that and rtol ‖b̃‖: an inexact Newton method with a
 //! constant forcing term (Eisenstat and Walker, SIAM J. Sci. Comput. 17, 1996). As the
 //! iterations converge the starting residual falls below rtol ‖b̃‖ / η and the solves are tight
-//! again. The loop's criteria see Γ_C only, so a step whose contact settles at once (or a
-//! loop that would stop after a loose solve) could leave the equations away from Γ_C solved to
-//! η alone; the loop therefore accepts an iterate only after a solve to rtol: where its
-//! criteria hold after a loose one, one more Newton iteration of the same convex problem is
-//! solved to rtol and the criteria taken again (so does Newton on the law). Measured against
-//! η = 0 (the solves to rtol of the builds before), the same slip counts at every step and
-//! contact fields within 4·10⁻⁷ in each case: the 3D example (17k unknowns, 64 steps) 1 258 →
-//! 1 259 Newton and 3 715 → 2 108 Krylov iterations; at 972k, 4 steps, 64 → 64 and 303 → 121
-//! (with `contact_sweeps = 1`: 32 → 33 and 163 → 60); at 47k and k = 1/8, 8 steps, 646 → 652
-//! and 7 306 → 1 814 (with `contact_sweeps = 1`: 321 → 335 and 3 524 → 995); the 2D example
-//! (iterative path) 378 → 380 and 1 492 → 667; the pad 3 450 → 1 132; `own_laws3d.toml` 13 448
-//! → 7 192. η = 0.01 saves less (2 219 and 2 302 Krylov iterations on the 17k example and at
-//! k = 1/8); η = 0.1 a little more at k = 1/8 (1 463) but lengthens the loop where a step has
-//! several solutions (the 17k example with `contact_sweeps = 1`: 422 → 729 Newton iterations
-//! and a step left to Newton on the law; one slip count apart at k = 1/8). Without the solve to
-//! rtol before the loop stops, `tests/thermal.rs`'s moving temperature (whose contact settles
-//! in the first Newton iteration) ends 1.2·10⁻² off its exact θ.
+//! again. The loop's criteria see Γ_C only, so a step whose contact settles at once (or a loop
+//! that would stop after a loose solve) could leave the equations away from Γ_C solved to η
+//! alone; the loop therefore accepts an iterate only after a solve to rtol: where its criteria
+//! hold after a loose one, one more Newton iteration of the same convex problem is solved to
+//! rtol and the criteria taken again (so does Newton on the law). Measured against every solve
+//! to rtol (`krylov_forcing = 0`, the builds before, byte for byte), with the same slip counts
+//! at every step and the contact fields within 4·10⁻⁷ (8.5·10⁻⁷ at k = 1/8 with
+//! `contact_sweeps = 1`): Krylov iterations 3 715 → 2 219 on the 3D example (17k unknowns, 64
+//! steps), 303 → 149 at 972k (4 steps; 163 → 77 with `contact_sweeps = 1`), 7 306 → 2 302 at
+//! 47k and k = 1/8 (8 steps), 1 492 → 667 on the 2D example, 3 450 → 1 276 on the pad, 13 448 →
+//! 7 128 on `own_laws3d.toml`, the Newton iterations within −5 % and +1.2 %. η = 0.03 saves more
+//! on these (121 at 972k, 1 814 at k = 1/8) but on the brake pad, whose contact-pressure
+//! iterates each converge in two loop iterates, every loose solve costs a Newton iteration more
+//! (12 633 → 17 729 Krylov iterations, 15.0 → 22.1 s) and its last step, where the disc stops
+//! and every node sticks, ends at another of the step's solutions (the stuck nodes' ξ 2 % of
+//! |ξ| apart; η = 0.01: 18.8 s, the same solution); η = 0.1 lengthens the loop where a step
+//! has several solutions (the 17k example with `contact_sweeps = 1`: 422 → 729 Newton
+//! iterations and a step left to Newton on the law); η scaled down with the loop's change
+//! (with each convex problem's tolerance) tightens the solves that end a step, which the loop
+//! does not need and which cost most at k = 1/8 (972k: 32 s per step against 30). Without the
+//! solve to rtol before the loop stops, `tests/thermal.rs`'s moving temperature (whose contact
+//! settles in the first Newton iteration) ends 1.2·10⁻² off its exact θ.
+//!
+//! **A step solved again starts from its last solution.** The fixed points on the contact
+//! pressure and on a nonlinear heat exchange ([`super::StepSolver`]) solve each step several
+//! times with other data, each from the previous step's state. The last solution of the same
+//! step is kept, and a solve of it again starts its Newton iterations there, its first convex
+//! problem's bounds still those of the previous step's slip: the same convex problems, the
+//! same solution to the tolerance, from nearer (the brake pad, 60 steps, 388 pressure
+//! iterates: 21 250 → 12 633 Krylov iterations and 27.1 → 15.0 s with every solve to rtol;
+//! the contact fields within 2.8·10⁻⁵ of the cold starts'.)
 //!
 //! **Where the loop fails: Newton on the nonmonotone law.** The direct path descends on the
 //! condensed step's energy where its loop fails ([`super::descent`]); that needs the dense
@@ -127,9 +141,9 @@
 //!   22, but another solution where the law is steep (one node of 440 on another branch at step
 //!   16, the fields then 0.1–1 % from the direct path's);
 //! - inexact Krylov solves, the tolerance tied to the loop's change (10⁻⁴ … 10⁻¹⁰): the loop
-//!   reached other solutions and failed at step 50 even at k/32 (the forcing term above ties
-//!   each solve instead to the residual it starts from, which the solves carry, and accepts
-//!   a step only after a solve to rtol);
+//!   reached other solutions and failed at step 50 even at k/32 (the forcing term above is
+//!   relative to the residual each solve starts from, which the solves carry, and a step is
+//!   accepted only after a solve to rtol);
 //! - Anderson acceleration (depth 5) of the friction bounds between convexification iterates:
 //!   5 033 iterations instead of 1 320, 29 cutbacks, other solutions (the bound map switches
 //!   between stick and slip: it is not smooth);
@@ -526,6 +540,20 @@ pub struct NewtonKrylov<'a> {
     /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the
     /// first (`solver.contact_sweeps`; 0: the paper's loop).
     contact_sweeps: usize,
+    /// The last step's solution, the Newton iterations' start where the same step is solved
+    /// again with other data (the fixed points on the contact pressure and on a nonlinear heat
+    /// exchange, [`super::StepSolver`]).
+    last: std::sync::Mutex<Option<LastSolution>>,
+}
+
+/// A step's solution, kept for a solve of the same step again.
+struct LastSolution {
+    /// The step: from the state at `from` to the one at `t`.
+    from: f64,
+    t: f64,
+    /// All unknowns (the system's order) and ξ.
+    x: Vec<f64>,
+    xi: Vec<f64>,
 }
 
 impl<'a> NewtonKrylov<'a> {
@@ -552,6 +580,7 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations,
             anderson_depth,
             contact_sweeps,
+            last: std::sync::Mutex::new(None),
         }
     }
 
@@ -569,10 +598,22 @@ impl<'a> NewtonKrylov<'a> {
         let t = laws.t;
         let (b, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
         let mut info = StepInfo::default();
+        // The same step solved again (another pressure or heat-exchange iterate): its last
+        // solution is where the Newton iterations start.
+        let warm = {
+            let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+            last.take().filter(|l| l.t == t && l.from == previous.t)
+        };
         let mut guard = sys.lock_for_step();
         let (a, solver) = &mut *guard;
-        let iterate = self.converge(previous, laws, &b, x, (a, solver), &mut info)?;
+        let iterate = self.converge(previous, laws, &b, (x, warm), (a, solver), &mut info)?;
         drop(guard);
+        *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some(LastSolution {
+            from: previous.t,
+            t,
+            x: iterate.x.clone(),
+            xi: iterate.xi.clone(),
+        });
         let mut x_unknowns = vec![0.0; n];
         sys.order.iter().zip(&iterate.x).for_each(|(&o, v)| x_unknowns[o] = *v);
         let state = sys.rhs.state_from(problem, previous, t, &x_unknowns, iterate.xi);
@@ -581,13 +622,16 @@ impl<'a> NewtonKrylov<'a> {
 
     /// The step's unknowns, from x (the previous step's, in the system's order) to x whole (in a
     /// distributed run too): the convexification loop, and where it fails Newton on the
-    /// nonmonotone law from the step's start.
+    /// nonmonotone law from the step's start. With `warm` (this step's solution for other
+    /// data) the first convex problem is the same (its bounds those of the previous step's
+    /// slip) but its Newton iterations start from `warm`: the same iterates to the tolerance,
+    /// from nearer.
     fn converge(
         &self,
         previous: &State,
         laws: &ContactLaws,
         b: &[f64],
-        x: Vec<f64>,
+        (x, warm): (Vec<f64>, Option<LastSolution>),
         (a, solver): (&mut CsrMatrix, &mut KrylovSolver),
         info: &mut StepInfo,
     ) -> Result<AllUnknowns, SolveError> {
@@ -619,6 +663,16 @@ impl<'a> NewtonKrylov<'a> {
             },
             inner_converged: false,
             anderson: TailAnderson::new(self.anderson_depth),
+            first_bounds: None,
+        };
+        let first = match warm {
+            Some(LastSolution { x: warm_x, xi, .. }) => {
+                newton.first_bounds = Some(laws.bounds(&start(x).w));
+                let mut w = self.tangential(&warm_x);
+                laws.make_relative(&mut w);
+                AllUnknowns { x: warm_x, w, xi }
+            }
+            None => start(x),
         };
         let params = LoopParams {
             solver: "iterative",
@@ -628,7 +682,7 @@ impl<'a> NewtonKrylov<'a> {
                 ceiling: INNER_CEILING,
             },
         };
-        let mut iterate = match convexify(&mut newton, start(x), &params, info) {
+        let mut iterate = match convexify(&mut newton, first, &params, info) {
             Ok(iterate) => iterate,
             Err(SolveError::NotConverged(failure)) => {
                 let t = laws.t;
@@ -713,6 +767,9 @@ struct SemismoothNewton<'s, 'a> {
     /// The acceleration of the loop's tail: the bounds of the next convex problem where it
     /// combines.
     anderson: TailAnderson,
+    /// The first convex problem's bounds where its iterate is not the previous step's (a
+    /// warm start): those of the previous step's slip, the paper's loop's.
+    first_bounds: Option<Vec<f64>>,
 }
 
 impl SemismoothNewton<'_, '_> {
@@ -795,7 +852,8 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         // Γ_C rows do not hold this step's equations), the bounds of the slip that nonlinear
         // Gauss–Seidel sweeps over Γ_C predict, where `solver.contact_sweeps` asks for them.
         let sweeps = if m > 1 { solver.contact_sweeps } else { 0 };
-        let frozen = match self.anderson.take_bounds() {
+        let first_bounds = if m == 1 { self.first_bounds.take() } else { None };
+        let frozen = match self.anderson.take_bounds().or(first_bounds) {
             Some(bounds) => bounds,
             None if sweeps > 0 => {
                 info.predicted_iterates += 1;
