@@ -307,6 +307,18 @@ mod tests {
         }
     }
 
+    /// b − A x.
+    fn b_minus_a_x(a: &CsrMatrix, b: &[f64], x: &[f64]) -> Vec<f64> {
+        let mut ax = vec![0.0; b.len()];
+        a.mul(x, &mut ax);
+        b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
+    }
+
+    /// A right-hand side of [`two_domains`]'s size with no zero entry.
+    fn smooth_rhs() -> Vec<f64> {
+        (0..10).map(|i| (i as f64 * 1.3).sin() + 0.5).collect()
+    }
+
     /// A solver that keeps its vectors gives, solve after solve, the bits of a fresh one: after
     /// a long solve (its kept basis longer than the next needs), from a warm start with the
     /// residual given, and after its vectors are given back.
@@ -357,12 +369,8 @@ mod tests {
             max_iterations: 100,
             restart: 3,
         });
-        let true_residual = |b: &[f64], x: &[f64]| -> Vec<f64> {
-            let mut ax = vec![0.0; 10];
-            a.mul(x, &mut ax);
-            b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
-        };
-        let b: Vec<f64> = (0..10).map(|i| (i as f64 * 1.3).sin() + 0.5).collect();
+        let true_residual = |b: &[f64], x: &[f64]| b_minus_a_x(&a, b, x);
+        let b = smooth_rhs();
         let (mut x, mut r) = (vec![0.0; 10], Vec::new());
         let info = solver.solve(&a, &Unpreconditioned, &b, &mut x, &mut r).unwrap();
         assert!(info.iterations > 3, "more than one cycle: {info:?}");
@@ -389,12 +397,8 @@ mod tests {
             max_iterations: 100,
             restart: 30,
         };
-        let true_residual = |b: &[f64], x: &[f64]| -> Vec<f64> {
-            let mut ax = vec![0.0; 10];
-            a.mul(x, &mut ax);
-            b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
-        };
-        let b: Vec<f64> = (0..10).map(|i| (i as f64 * 1.3).sin() + 0.5).collect();
+        let true_residual = |b: &[f64], x: &[f64]| b_minus_a_x(&a, b, x);
+        let b = smooth_rhs();
         let start: Vec<f64> = (0..10).map(|i| 0.1 * (i as f64 * 0.7).cos()).collect();
         let r0 = true_residual(&b, &start);
         let solve = |forcing: f64| {
