@@ -103,7 +103,10 @@ fn the_3d_brake_slides_carries_its_load_and_heats_by_its_share_of_the_friction()
 }
 
 /// Both paths reach the same solution (the iterative path with the AMG: ILU(0) alone does not
-/// converge where the steel's stiffness dominates the mass term at this k).
+/// converge where the steel's stiffness dominates the mass term at this k), to a small multiple
+/// of the solvers' tolerance ε_conv = 1e-6 (measured: w 1.6e-6 apart in 3D, since the iterative
+/// path starts each contact-pressure iterate's Newton iterations from the step's last solution
+/// and the direct path from the previous step's state; 1e-6 before that).
 #[cfg(feature = "petsc")]
 #[test]
 fn the_brake_on_the_iterative_path_is_the_brake_on_the_direct_path() {
@@ -129,7 +132,7 @@ fn the_brake_on_the_iterative_path_is_the_brake_on_the_direct_path() {
             ("pressure", &iterative.pressure, &direct.pressure),
         ] {
             let difference = relative(a, b);
-            assert!(difference < 1e-6, "{file}: {name} differs by {difference:e}");
+            assert!(difference < 1e-5, "{file}: {name} differs by {difference:e}");
         }
     }
 }
