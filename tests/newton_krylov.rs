@@ -26,6 +26,13 @@ fn run(file: Option<&str>, overrides: &[&str], linear: &str) -> (Summary, State)
     load(file, overrides, linear).run_quiet().unwrap()
 }
 
+/// The error that validating the default scenario with `set` gives.
+fn refused(set: &str) -> String {
+    (Scenario::load(None, &[set.to_string()]).and_then(|s| s.validate()))
+        .unwrap_err()
+        .to_string()
+}
+
 /// Runs both paths and compares them; returns the iterative run's summary.
 fn compare(file: Option<&str>, overrides: &[&str]) -> Summary {
     let (direct_summary, direct) = run(file, overrides, "direct");
@@ -426,10 +433,7 @@ fn outer_iterations_stay_bounded_where_the_slip_zone_converges() {
 
 #[test]
 fn the_anderson_depth_is_bounded_with_a_clear_error() {
-    let error = Scenario::load(None, &["solver.anderson_depth=40".into()])
-        .and_then(|s| s.validate())
-        .unwrap_err()
-        .to_string();
+    let error = refused("solver.anderson_depth=40");
     assert!(
         error.contains("solver.anderson_depth") && error.contains("40") && error.contains("at most 8"),
         "{error}"
@@ -519,10 +523,7 @@ fn predicted_bounds_return_solutions_of_the_law_where_a_step_has_several() {
 
 #[test]
 fn the_contact_sweeps_are_bounded_with_a_clear_error() {
-    let error = Scenario::load(None, &["solver.contact_sweeps=9".into()])
-        .and_then(|s| s.validate())
-        .unwrap_err()
-        .to_string();
+    let error = refused("solver.contact_sweeps=9");
     assert!(
         error.contains("solver.contact_sweeps") && error.contains('9') && error.contains("at most 8"),
         "{error}"
@@ -575,10 +576,7 @@ fn inexact_newton_solves_reach_the_exact_solves_solution_in_fewer_krylov_iterati
 #[test]
 fn the_krylov_forcing_is_a_fraction_with_a_clear_error() {
     for value in ["1.0", "-0.1", "nan"] {
-        let error = Scenario::load(None, &[format!("solver.krylov_forcing={value}")])
-            .and_then(|s| s.validate())
-            .unwrap_err()
-            .to_string();
+        let error = refused(&format!("solver.krylov_forcing={value}"));
         assert!(
             error.contains("solver.krylov_forcing") && error.contains("[0, 1)"),
             "{value}: {error}"

@@ -181,7 +181,10 @@ impl Gmres {
             r.fill(0.0);
             return Ok(SolveInfo::default());
         }
-        let target = (params.rtol * bnorm).max(forcing * norm(r));
+        let mut target = params.rtol * bnorm;
+        if forcing > 0.0 {
+            target = target.max(forcing * norm(r));
+        }
         let mut history = vec![norm(r) / bnorm];
         let mut it = 0;
         loop {

@@ -21,7 +21,7 @@
 //!
 //! Depends on: the step's figures and failures ([`super::StepInfo`], [`super::StepFailure`]).
 
-use super::{worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
+use super::{all_hold, worst_criterion, Criterion, SolveError, StepFailure, StepInfo};
 
 /// A convex problem of the loop, solved in place, and the stop test of the loop.
 pub(super) trait ConvexSubproblem {
@@ -105,7 +105,7 @@ pub(super) fn convexify<C: ConvexSubproblem>(
         info.convexification_iterations = m;
         super::heartbeat::outer("convexification", m, &checks);
         inner_tolerance = params.inner.next(inner_tolerance, &checks);
-        if checks.iter().all(|&(_, value, tolerance)| value <= tolerance) && subproblem.accept(&mut iterate) {
+        if all_hold(&checks) && subproblem.accept(&mut iterate) {
             return Ok(iterate);
         }
     }

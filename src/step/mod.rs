@@ -664,6 +664,11 @@ impl From<ModelError> for SolveError {
     }
 }
 
+/// Whether every (criterion, value, tolerance) holds.
+pub(crate) fn all_hold(checks: &[(Criterion, f64, f64)]) -> bool {
+    checks.iter().all(|&(_, value, tolerance)| value <= tolerance)
+}
+
 /// The worst of several (criterion, value, tolerance): the one furthest past its tolerance.
 pub fn worst_criterion(checks: &[(Criterion, f64, f64)]) -> (Criterion, f64, f64) {
     *checks

@@ -256,7 +256,7 @@ use super::anderson::TailAnderson;
 use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::newton::{node_law_residual, slip_linearization};
-use super::{Criterion, SolveError, StepInfo};
+use super::{all_hold, Criterion, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::la::CsrMatrix;
 use crate::model::{ContactLaws, Problem, State};
@@ -637,15 +637,17 @@ impl<'a> NewtonKrylov<'a> {
     ) -> Result<AllUnknowns, SolveError> {
         let (problem, sys) = (self.problem, &self.system);
         let (td, n) = (problem.dim() - 1, sys.order.len());
-        // The step's start (all unknowns from the previous step), again for the way out.
-        let start = |x: Vec<f64>| {
-            let mut w = self.tangential(&x);
+        // w_τ relative to the foundation at the unknowns x.
+        let relative_slip = |x: &[f64]| {
+            let mut w = self.tangential(x);
             laws.make_relative(&mut w);
-            AllUnknowns {
-                x,
-                w,
-                xi: previous.xi.clone(),
-            }
+            w
+        };
+        // The step's start (all unknowns from the previous step), again for the way out.
+        let start = |x: Vec<f64>| AllUnknowns {
+            w: relative_slip(&x),
+            x,
+            xi: previous.xi.clone(),
         };
         let mut newton = SemismoothNewton {
             solver: self,
@@ -666,11 +668,13 @@ impl<'a> NewtonKrylov<'a> {
             first_bounds: None,
         };
         let first = match warm {
-            Some(LastSolution { x: warm_x, xi, .. }) => {
-                newton.first_bounds = Some(laws.bounds(&start(x).w));
-                let mut w = self.tangential(&warm_x);
-                laws.make_relative(&mut w);
-                AllUnknowns { x: warm_x, w, xi }
+            Some(LastSolution { x: warm, xi, .. }) => {
+                newton.first_bounds = Some(laws.bounds(&relative_slip(&x)));
+                AllUnknowns {
+                    w: relative_slip(&warm),
+                    x: warm,
+                    xi,
+                }
             }
             None => start(x),
         };
@@ -815,7 +819,7 @@ impl SemismoothNewton<'_, '_> {
             let new_bounds = laws.bounds(&iterate.w);
             let checks = solver.criteria(&iterate.w, &w_old, &iterate.xi, &xi_old, &bounds, &new_bounds);
             super::heartbeat::outer("Newton on the nonmonotone law", n, &checks);
-            if checks.iter().all(|&(_, value, tolerance)| value <= tolerance) {
+            if all_hold(&checks) {
                 if self.linearization.tight {
                     return Ok(Some(iterate));
                 }
@@ -880,8 +884,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         }
         let mut bounds = laws.bounds(&iterate.w);
         let mut checks = solver.criteria(&iterate.w, &w_outer, &iterate.xi, &xi_outer, &frozen, &bounds);
-        let stops = |checks: &[(Criterion, f64, f64)]| checks.iter().all(|&(_, value, tolerance)| value <= tolerance);
-        if self.inner_converged && !self.linearization.tight && stops(&checks) {
+        if self.inner_converged && !self.linearization.tight && all_hold(&checks) {
             // The loop would stop here, but the last solve stopped at the forcing term: the
             // step's linear equations (away from Γ_C too, which the criteria do not see) hold
             // only to a fraction of the residual it started from. One more Newton iteration,
