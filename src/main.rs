@@ -152,7 +152,7 @@ enum Command {
         #[arg(long)]
         friction_bound_3d: Option<f64>,
         /// The 3D suite's iterative runs with their convexification iterates' bounds predicted
-        /// by this many nonlinear Gauss–Seidel sweeps over Γ_C (`solver.contact_sweeps`;
+        /// by this many symmetric nonlinear Gauss–Seidel sweeps over Γ_C (`solver.contact_sweeps`;
         /// default: the scenario's 0, the paper's loop; docs/solvers.md).
         #[arg(long)]
         contact_sweeps_3d: Option<usize>,

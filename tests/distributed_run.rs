@@ -335,7 +335,7 @@ mod distributed {
         );
     }
 
-    /// The same with the loop's bounds predicted by a Gauss–Seidel sweep over Γ_C
+    /// The same with the loop's bounds predicted by a symmetric Gauss–Seidel sweep over Γ_C
     /// (`solver.contact_sweeps`): every rank sweeps the same nodes from the same numbers.
     #[test]
     fn predicted_bounds_on_two_and_three_ranks_equal_one_process() {

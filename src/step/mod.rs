@@ -450,7 +450,7 @@ pub struct SolverParams {
     /// Depth of the Anderson acceleration of the iterative path's convexification loop in its
     /// linear tail (`anderson::TailAnderson`; 0: off).
     pub anderson_depth: usize,
-    /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate of the
+    /// Symmetric nonlinear Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate of the
     /// iterative path's convexification loop after its first (0: the paper's loop; another
     /// rule where a step has several solutions: docs/solvers.md).
     pub contact_sweeps: usize,

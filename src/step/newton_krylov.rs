@@ -40,17 +40,51 @@
 //! the slip front (below): a node that starts slipping keeps the bound of its last slip for
 //! the whole iterate, and its neighbours feel it only in the next, so the zone spreads and
 //! deepens about one ring per iterate. From a step's second iterate on, the bounds may instead
-//! be frozen at the slip that nonlinear Gauss–Seidel sweeps over Γ_C predict
+//! be frozen at the slip that symmetric nonlinear Gauss–Seidel sweeps over Γ_C predict
 //! ([`Linearization::gauss_seidel_slip`]): each contact node's tangential rows of A solved with
 //! the law itself, every other unknown at its latest value, the node's slip the local minimizer
 //! reached downhill from its current one (the descent's nodal search,
-//! [`super::descent::radial_minimizer`]). A node that starts slipping weakens within the sweep,
-//! and the nodes swept after it see its new slip: the front moves many rings per iterate. The
-//! sweep is a pass over Γ_C's rows (no solve); a solution of the law whose nodal slips are local
-//! minimizers of their nodal problems is a fixed point of it, and the stop test is the loop's,
-//! so every returned step solves the same equations to the same tolerance. Measured on
-//! the 3D example at k = 1/64, 4 steps, one sweep: 5.75 → 5.0 Newton iterations per step at
-//! 47k unknowns, 6.75 → 5.5 at 98k, 9.5 → 6.75 at 291k, 16 → 8.0 at 972k (Krylov 303 → 163,
+//! [`super::descent::radial_minimizer`]), node by node in Γ_C's order and then back. A node
+//! that starts slipping weakens within the sweep, and the nodes relaxed after it see its new
+//! slip: the front moves many nodes per iterate. The sweep is a pass over Γ_C's rows (no
+//! solve); a solution of the law whose nodal slips are local minimizers of their nodal problems
+//! is a fixed point of it, and the stop test is the loop's, so every returned step solves the
+//! same equations to the same tolerance. Where the iterates stop moving while the law does not
+//! yet hold at them (the increments below ε_conv, the law above: a node the sweep relaxes to
+//! another local minimizer than the one the convex problem holds it at, which repeats
+//! unchanged), the prediction has stalled and the rest of the step is the paper's loop (the
+//! 3D example at 972k unknowns, 16 steps: one step ran 400 iterates and was cut back without
+//! this; with it 16 iterates).
+//!
+//! *Why the sweep runs both ways.* In some steps a front runs along a row of contact nodes (a
+//! row of the 3D example's structured Γ_C, about nx nodes long, starts slipping): each node
+//! that slips sheds load onto the next only once it weakens. The paper's loop then moves the
+//! front one node per iterate, and so does a forward sweep where the front runs against Γ_C's
+//! order. The backward pass carries such a front across in one sweep. Measured (the 3D
+//! example, k = 1/64, 16 steps, the paper's loop / one forward sweep / one symmetric sweep):
+//! Newton iterations per step 8.25 / 5.75 / 5.62 at 47k unknowns, 9.06 / 6.25 / 5.81 at 98k,
+//! 12.8 (two steps cut back, to k/4) / 30.9 (a step of 101 iterates) / 7.06 (at most 6
+//! iterates) at 291k, 28.9 (three steps cut back, to k/8) / 77.1 (a step of 200 iterates, then
+//! Newton on the law) / 10.7 (at most 16) at 972k; the 16 steps at 972k took 330, 147 and 32 s.
+//! On slabs long in x (`tests/newton_krylov.rs`), 80 × 8 × 8 cells: the longest step 154 / 76 /
+//! 7 iterates. Not every front: on 104 × 6 × 6 one step takes 98 iterates either way, a front
+//! that sheds its load through the bulk (which the sweep holds) more than through Γ_C's own
+//! rows; relaxing the rows of the bulk nodes next to each contact node after it (one
+//! Gauss–Seidel update each) took another step there from 36 iterates to 8 but left that one
+//! at 97, and an over-relaxed nodal step (κ scaled by 0.7, 0.5, 0.3) made every case worse
+//! (up to 200 iterates and cutbacks).
+//!
+//! *The way out of the paper's loop.* Where the paper's loop fails (`solver.max_convexification`
+//! iterates without converging), the loop with predicted bounds runs again from the step's
+//! start before Newton on the nonmonotone law is tried: a step the paper's loop converges in
+//! keeps its solution, and one it cannot (a front it crawls along at one node per iterate) is
+//! finished instead of cut back. The 3D example at 972k unknowns, 16 steps: three steps cut
+//! back (132, 70 and 90 s each) before, none after (48, 47 and 36 s, most of it the paper's
+//! 200 iterates that fail); at 291k the two cut back steps likewise.
+//!
+//! Measured on the 3D example at k = 1/64, 4 steps, one forward sweep (before the backward
+//! pass; the 4 steps have no front along a row): 5.75 → 5.0 Newton iterations per step at 47k
+//! unknowns, 6.75 → 5.5 at 98k, 9.5 → 6.75 at 291k, 16 → 8.0 at 972k (Krylov 303 → 163,
 //! 3.41–3.66 → 2.03–2.10 s per step), the same slip counts, contact fields within 1.7·10⁻⁷; at
 //! 972k and k = 1/8 the first step 73 → 44 Newton iterations, the same 1 386 slipping nodes.
 //! Two sweeps: 5.75 at 291k, 8.0 at 972k; four: 5.5 at 291k. It is a choice
@@ -64,14 +98,15 @@
 //! its slip; measured with the first iterate predicted too: another solution on the coarse 2D and 3D cases, and 54.75 outer iterations per
 //! step on the S = 8 case at nx = 32); only nodes already slipping predicted (the same result
 //! as all nodes on the coarse 3D case); the prediction only after 3, 6 or 10 plain iterates
-//! (the 17k example still parts from the loop at steps 12, 48 and 48); two sweeps, the second
-//! backwards (24 and 33 Newton iterations at 291k and 972k against two forward sweeps' 23 and
-//! 32); over-relaxed sweeps, each node's slip moved ω times its Gauss–Seidel change (ω = 1.3:
+//! (the 17k example still parts from the loop at steps 12, 48 and 48); over-relaxed sweeps, each node's slip moved ω times its Gauss–Seidel change (ω = 1.3:
 //! 27 at 291k, as ω = 1; ω = 1.6: 30); the first iterate's convex problem cut to one Newton iteration (its bounds are replaced
 //! by the prediction anyway): 4.0, 6.0 and 6.5 Newton iterations per step at 47k, 291k and 972k
 //! against 5.0, 6.75 and 8.0 with the same solutions there and on the 2D example, but the pad
 //! (`scenarios/pad3d.toml`, several solutions per step) parts from the paper's loop at 11 of its
-//! 32 steps instead of 2.
+//! 32 steps instead of 2. Semismooth Newton on the law (capped fall) once a stalled front's law
+//! residual stays flat: cycles with period 3 (291k, the step of 101 iterates); the same once
+//! the split settles in a slow tail (972k, k = 1/8): 45 → 37–39 Newton iterations in the first
+//! step, the same slip count, but near a fixed point the loop repels it would converge there.
 //!
 //! **Inexact Newton solves (`solver.krylov_forcing`, default 0.01).** Each Newton iteration's
 //! Krylov solve starts from the last iterate with its residual carried (only Γ_C's rows and the
@@ -276,6 +311,10 @@ enum Linearized {
 /// same convexification iterates and solution (module header).
 const INNER_CEILING: f64 = 1e-3;
 
+/// Symmetric Gauss–Seidel sweeps over Γ_C that predict the bounds of the loop run again where
+/// the paper's loop fails (the first way out, before Newton on the nonmonotone law).
+const WAY_OUT_SWEEPS: usize = 1;
+
 /// Newton iterations per convex problem before its convexification iterate moves on anyway
 /// (the next iterate starts from where this one stopped).
 const MAX_NEWTON_PER_CONVEX_PROBLEM: usize = 20;
@@ -333,74 +372,84 @@ impl Linearization<'_> {
             .collect()
     }
 
-    /// The slip that `sweeps` nonlinear Gauss–Seidel sweeps over the contact nodes predict
-    /// from the iterate (x, w): node by node, in Γ_C's order, the node's tangential rows of A
-    /// with every other unknown at its latest value (the nodes before it at their new ones, the
-    /// rest of x frozen) and the friction law itself, −ξ_i = b_i(|z_i|) z_i/|z_i| for the
-    /// relative slip z_i = w_i − v_F,i: with κ the mean of the node's diagonal entries (its
-    /// off-diagonal block taken at the current w_i), z_i ∥ σ_i and |z_i| is the nodal
-    /// problem's local minimizer κ s + ℓ_i b_i(s) = |σ_i| reached downhill from the current
-    /// slip ([`super::descent::radial_minimizer`]). Returns the predicted relative slip,
-    /// node-major as w.
+    /// The slip that `sweeps` symmetric nonlinear Gauss–Seidel sweeps over the contact nodes
+    /// predict from the iterate (x, w): node by node, in Γ_C's order and then back, the node's
+    /// tangential rows of A with every other unknown at its latest value (the nodes relaxed
+    /// before it at their new ones, the rest of x frozen) and the friction law itself,
+    /// −ξ_i = b_i(|z_i|) z_i/|z_i| for the relative slip z_i = w_i − v_F,i: with κ the mean of
+    /// the node's diagonal entries (its off-diagonal block taken at the current w_i), z_i ∥ σ_i
+    /// and |z_i| is the nodal problem's local minimizer κ s + ℓ_i b_i(s) = |σ_i| reached downhill
+    /// from the current slip ([`super::descent::radial_minimizer`]). The backward pass carries a
+    /// slip front that moves against Γ_C's order as far in one sweep as the forward pass one that
+    /// moves with it (the module header). Returns the predicted relative slip, node-major as w.
     fn gauss_seidel_slip(&self, x: &[f64], w: &[f64], sweeps: usize) -> Vec<f64> {
-        let sys = self.system;
-        let (td, first) = (self.td, sys.first_contact);
-        let a = &*self.a;
+        let first = self.system.first_contact;
         // The Γ_C tangential velocities, updated node by node; every other unknown stays.
         let mut contact = x[first..].to_vec();
         let mut slip = w.to_vec();
+        let n = self.system.nodes.len();
         for _ in 0..sweeps {
-            for (i, node) in sys.nodes.iter().enumerate() {
-                let m = node.tangent.len();
-                if m == 0 {
-                    continue;
-                }
-                // s = b − (A x without the node's own block), the block, w_i and v_F,i.
-                let (mut s, mut block, mut wi, mut v) = ([0.0; 2], [[0.0; 2]; 2], [0.0; 2], [0.0; 2]);
-                for (j, &(k, row)) in node.tangent.iter().enumerate() {
-                    let values = &sys.base[a.offset_from(first, row)];
-                    let mut sum = self.b[row];
-                    for (&col, &value) in a.row(row).0.iter().zip(values) {
-                        let col = col as usize;
-                        match node.tangent.iter().position(|&(_, r)| r == col) {
-                            Some(l) => block[j][l] = value,
-                            None if col >= first => sum -= value * contact[col - first],
-                            None => sum -= value * x[col],
-                        }
-                    }
-                    s[j] = sum;
-                    wi[j] = contact[row - first];
-                    v[j] = self.laws.foundation().map_or(0.0, |f| f[i * td + k]);
-                }
-                let kappa = (0..m).map(|j| block[j][j]).sum::<f64>() / m as f64;
-                let (mut sigma, mut z) = ([0.0; 2], [0.0; 2]);
-                for j in 0..m {
-                    let off_kappa: f64 = (0..m)
-                        .map(|l| (block[j][l] - if j == l { kappa } else { 0.0 }) * wi[l])
-                        .sum();
-                    sigma[j] = s[j] - off_kappa - kappa * v[j];
-                    z[j] = wi[j] - v[j];
-                }
-                let sigma_norm = norm(&sigma[..m]);
-                let radius = super::descent::radial_minimizer(
-                    |r| self.laws.bound(i, r),
-                    kappa,
-                    node.weight,
-                    sigma_norm / kappa,
-                    norm(&z[..m]),
-                );
-                for (j, &(k, row)) in node.tangent.iter().enumerate() {
-                    let zj = if sigma_norm > 0.0 {
-                        radius * sigma[j] / sigma_norm
-                    } else {
-                        0.0
-                    };
-                    contact[row - first] = v[j] + zj;
-                    slip[i * td + k] = zj;
-                }
+            for i in (0..n).chain((0..n).rev()) {
+                self.relax_node(i, x, &mut contact, &mut slip);
             }
         }
         slip
+    }
+
+    /// One node's step of [`Self::gauss_seidel_slip`]: its tangential velocities in `contact`
+    /// (Γ_C's unknowns, the system's order from `first_contact`) and its relative slip in `slip`.
+    fn relax_node(&self, i: usize, x: &[f64], contact: &mut [f64], slip: &mut [f64]) {
+        let sys = self.system;
+        let (td, first) = (self.td, sys.first_contact);
+        let a = &*self.a;
+        let node = &sys.nodes[i];
+        let m = node.tangent.len();
+        if m == 0 {
+            return;
+        }
+        // s = b − (A x without the node's own block), the block, w_i and v_F,i.
+        let (mut s, mut block, mut wi, mut v) = ([0.0; 2], [[0.0; 2]; 2], [0.0; 2], [0.0; 2]);
+        for (j, &(k, row)) in node.tangent.iter().enumerate() {
+            let values = &sys.base[a.offset_from(first, row)];
+            let mut sum = self.b[row];
+            for (&col, &value) in a.row(row).0.iter().zip(values) {
+                let col = col as usize;
+                match node.tangent.iter().position(|&(_, r)| r == col) {
+                    Some(l) => block[j][l] = value,
+                    None if col >= first => sum -= value * contact[col - first],
+                    None => sum -= value * x[col],
+                }
+            }
+            s[j] = sum;
+            wi[j] = contact[row - first];
+            v[j] = self.laws.foundation().map_or(0.0, |f| f[i * td + k]);
+        }
+        let kappa = (0..m).map(|j| block[j][j]).sum::<f64>() / m as f64;
+        let (mut sigma, mut z) = ([0.0; 2], [0.0; 2]);
+        for j in 0..m {
+            let off_kappa: f64 = (0..m)
+                .map(|l| (block[j][l] - if j == l { kappa } else { 0.0 }) * wi[l])
+                .sum();
+            sigma[j] = s[j] - off_kappa - kappa * v[j];
+            z[j] = wi[j] - v[j];
+        }
+        let sigma_norm = norm(&sigma[..m]);
+        let radius = super::descent::radial_minimizer(
+            |r| self.laws.bound(i, r),
+            kappa,
+            node.weight,
+            sigma_norm / kappa,
+            norm(&z[..m]),
+        );
+        for (j, &(k, row)) in node.tangent.iter().enumerate() {
+            let zj = if sigma_norm > 0.0 {
+                radius * sigma[j] / sigma_norm
+            } else {
+                0.0
+            };
+            contact[row - first] = v[j] + zj;
+            slip[i * td + k] = zj;
+        }
     }
 
     /// One Newton iteration of the convex problem with the bounds `frozen`, from (w, ξ) (x the
@@ -666,6 +715,7 @@ impl<'a> NewtonKrylov<'a> {
             inner_converged: false,
             anderson: TailAnderson::new(self.anderson_depth),
             first_bounds: None,
+            sweeps: self.contact_sweeps,
         };
         let first = match warm {
             Some(LastSolution { x: warm, xi, .. }) => {
@@ -686,14 +736,25 @@ impl<'a> NewtonKrylov<'a> {
                 ceiling: INNER_CEILING,
             },
         };
+        let step_start = || -> Result<AllUnknowns, SolveError> {
+            let (_, x) = sys.start(problem, previous, laws.t, laws.exchange_temperature.as_deref())?;
+            Ok(start(x))
+        };
         let mut iterate = match convexify(&mut newton, first, &params, info) {
             Ok(iterate) => iterate,
             Err(SolveError::NotConverged(failure)) => {
-                let t = laws.t;
-                let (_, x) = sys.start(problem, previous, t, laws.exchange_temperature.as_deref())?;
-                match newton.nonmonotone_newton(start(x), info)? {
+                // The ways out, from the step's start: the loop with predicted bounds (where it
+                // was the paper's loop), then Newton on the nonmonotone law.
+                let predicted = match newton.sweeps {
+                    0 => newton.predicted_loop(step_start()?, &params, info)?,
+                    _ => None,
+                };
+                match predicted {
                     Some(iterate) => iterate,
-                    None => return Err(SolveError::NotConverged(failure)),
+                    None => match newton.nonmonotone_newton(step_start()?, info)? {
+                        Some(iterate) => iterate,
+                        None => return Err(SolveError::NotConverged(failure)),
+                    },
                 }
             }
             Err(other) => return Err(other),
@@ -774,9 +835,35 @@ struct SemismoothNewton<'s, 'a> {
     /// The first convex problem's bounds where its iterate is not the previous step's (a
     /// warm start): those of the previous step's slip, the paper's loop's.
     first_bounds: Option<Vec<f64>>,
+    /// Symmetric Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate after
+    /// the first (0: the paper's loop).
+    sweeps: usize,
 }
 
 impl SemismoothNewton<'_, '_> {
+    /// The first way out where the paper's loop fails: the loop again from the step's start,
+    /// its bounds predicted by [`WAY_OUT_SWEEPS`] symmetric sweeps over Γ_C from its second
+    /// iterate on. `None` where it fails too.
+    fn predicted_loop(
+        &mut self,
+        iterate: AllUnknowns,
+        params: &LoopParams,
+        info: &mut StepInfo,
+    ) -> Result<Option<AllUnknowns>, SolveError> {
+        // The failed loop's last solve left a residual for another x, and its history.
+        self.linearization.residual.clear();
+        self.anderson = TailAnderson::new(self.solver.anderson_depth);
+        self.first_bounds = None;
+        self.sweeps = WAY_OUT_SWEEPS;
+        let outcome = convexify(self, iterate, params, info);
+        self.sweeps = 0;
+        match outcome {
+            Ok(iterate) => Ok(Some(iterate)),
+            Err(SolveError::NotConverged(_)) => Ok(None),
+            Err(other) => Err(other),
+        }
+    }
+
     /// The way out where the loop fails: semismooth Newton on the nonmonotone law itself from
     /// the step's start (slip nodes linearized with the law's fall b′, capped at [`FALL_CAP`]
     /// A_ii/ℓ_i), stopping on the loop's criteria. `None` after [`MAX_NONMONOTONE_NEWTON`]
@@ -855,7 +942,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         // From the loop's second iterate on (the first starts from the previous step, whose
         // Γ_C rows do not hold this step's equations), the bounds of the slip that nonlinear
         // Gauss–Seidel sweeps over Γ_C predict, where `solver.contact_sweeps` asks for them.
-        let sweeps = if m > 1 { solver.contact_sweeps } else { 0 };
+        let sweeps = if m > 1 { self.sweeps } else { 0 };
         let first_bounds = if m == 1 { self.first_bounds.take() } else { None };
         let frozen = match self.anderson.take_bounds().or(first_bounds) {
             Some(bounds) => bounds,
@@ -896,6 +983,13 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             self.inner_converged = solver.law_residual(w, xi, &frozen) <= inner_tolerance * g_scale;
             bounds = laws.bounds(&iterate.w);
             checks = solver.criteria(&iterate.w, &w_outer, &iterate.xi, &xi_outer, &frozen, &bounds);
+        }
+        if sweeps > 0 && all_hold(&checks[..2]) && !all_hold(&checks[2..]) {
+            // The predicted bounds have stalled: the iterates no longer move, but the law does
+            // not hold at them (a node the sweep relaxes to another local minimizer of its
+            // nodal problem than the one the convex problem holds it at). The rest of the step
+            // is the paper's loop, from here.
+            self.sweeps = 0;
         }
         let split = (self.linearization.nodes.iter())
             .map(|node| matches!(node, Linearized::Slip(..)))

@@ -219,7 +219,7 @@ pub fn hard_cases() -> Vec<HardCase> {
         ),
         case(
             "3d-predicted",
-            "the same with the loop's bounds predicted by a sweep over Γ_C (solver.contact_sweeps = 1)",
+            "the same with the loop's bounds predicted by a symmetric sweep over Γ_C (solver.contact_sweeps = 1)",
             Some("scenarios/paper3d.toml"),
             &[
                 cells[0],
