@@ -43,6 +43,9 @@ pub struct ScaleRow {
     /// Slip nodes at the last step (the size of the slip zone the steps' iterations resolve).
     #[serde(default)]
     pub slip_nodes: Option<usize>,
+    /// Steps cut back into substeps (where the step's loop and its ways out failed).
+    #[serde(default)]
+    pub cutback_steps: usize,
     /// Stored entries of the factor (LDLᵀ or ILU(0)).
     pub factor_nnz: usize,
     pub peak_memory_mib: Option<f64>,
@@ -145,6 +148,7 @@ pub fn measure_3d(
             .and_then(|outputs| outputs.last())
             .and_then(|last| last["slip_nodes"].as_u64())
             .map(|n| n as usize),
+        cutback_steps: summary["cutbacks"].as_array().map_or(0, Vec::len),
         krylov_per_step: int(&summary["krylov_iterations"]) as f64 / done,
         factor_nnz: int(&summary["factor_nnz"]),
         peak_memory_mib: summary["peak_memory_mib"].as_f64(),
@@ -155,7 +159,7 @@ pub fn measure_3d(
 /// The table of `bench --3d`, with the growth exponents of each path in the unknowns.
 pub fn format_scale_table(rows: &[ScaleRow]) -> String {
     let mut out = format!(
-        "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>9} {:>6} {:>11} {:>8} {:>9}\n",
+        "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>9} {:>6} {:>4} {:>11} {:>8} {:>9}\n",
         "path",
         "cells",
         "unknowns",
@@ -168,13 +172,14 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
         "outer",
         "Krylov",
         "slip",
+        "cut",
         "factor nnz",
         "peak MiB",
         "wall s"
     );
     for r in rows {
         out.push_str(&format!(
-            "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>7.1} {:>9.1} {:>6} {:>11} {:>8} {:>9.1}\n",
+            "{:<13} {:>14} {:>8} {:>7} {:>9} {:>8.2} {:>8.2} {:>10.3} {:>8.1} {:>7.1} {:>9.1} {:>6} {:>4} {:>11} {:>8} {:>9.1}\n",
             r.path(),
             format!("{}×{}×{}", r.cells[0], r.cells[1], r.cells[2]),
             r.unknowns,
@@ -187,6 +192,7 @@ pub fn format_scale_table(rows: &[ScaleRow]) -> String {
             r.outer_per_step,
             r.krylov_per_step,
             r.slip_nodes.map_or("-".to_string(), |n| n.to_string()),
+            r.cutback_steps,
             r.factor_nnz,
             r.peak_memory_mib.map_or("-".to_string(), |m| format!("{m:.0}")),
             r.wall,
@@ -260,6 +266,7 @@ mod tests {
             outer_per_step: outer,
             krylov_per_step: 3.0 * newton,
             slip_nodes: Some(nx * 2),
+            cutback_steps: usize::from(nx == 160),
             factor_nnz: 60 * unknowns,
             peak_memory_mib: Some(unknowns as f64 * 1e-3),
             wall: 1.0,
@@ -282,9 +289,13 @@ mod tests {
             table.contains("Newton iterations per step ×3.00 and outer ×2.00"),
             "{table}"
         );
-        // The slip column shows each row's count.
+        // The slip and cutback columns show each row's counts.
         assert!(
-            table.lines().nth(1).is_some_and(|line| line.contains(" 320 ")),
+            table.lines().nth(1).is_some_and(|line| line.contains(" 320    1 ")),
+            "{table}"
+        );
+        assert!(
+            table.lines().nth(2).is_some_and(|line| line.contains(" 80    0 ")),
             "{table}"
         );
     }
