@@ -213,7 +213,7 @@ pub fn hard_cases() -> Vec<HardCase> {
         ),
         case(
             "3d-iterative",
-            "the same on the iterative path (Newton–Krylov; where the loop fails, Newton on the law)",
+            "the same on the iterative path (Newton–Krylov; where the loop fails, the loop with predicted bounds, then Newton on the law)",
             Some("scenarios/paper3d.toml"),
             &[cells[0], cells[1], cells[2], cells[3], "solver.linear=iterative"],
         ),
