@@ -327,9 +327,9 @@ fn a_krylov_solve_at_its_cap_fails_the_step_naming_the_linear_residual() {
     );
 }
 
-/// Where the convexification loop fails (here: capped at a few iterates), the iterative path
-/// finishes the step by Newton on the nonmonotone law from the step's start instead of cutting
-/// it back, and reaches the loop's solution where the step has one solution: the paper's 2D
+/// Where the convexification loop fails (here: capped at a few iterates, too few for its first
+/// way out, the loop with predicted bounds, as well), the iterative path finishes the step by
+/// Newton on the nonmonotone law from the step's start instead of cutting it back, and reaches the loop's solution where the step has one solution: the paper's 2D
 /// example (velocity weakening, 32 × 8 cells) and the 3D example with Tresca's law, against the
 /// same runs with the loop uncapped, fields to 10⁻⁷ and the same stick/slip state.
 #[test]

@@ -745,7 +745,7 @@ impl<'a> NewtonKrylov<'a> {
             Err(SolveError::NotConverged(failure)) => {
                 // The ways out, from the step's start: the loop with predicted bounds (where it
                 // was the paper's loop), then Newton on the nonmonotone law.
-                let predicted = match newton.sweeps {
+                let predicted = match self.contact_sweeps {
                     0 => newton.predicted_loop(step_start()?, &params, info)?,
                     _ => None,
                 };
@@ -855,7 +855,10 @@ impl SemismoothNewton<'_, '_> {
         self.anderson = TailAnderson::new(self.solver.anderson_depth);
         self.first_bounds = None;
         self.sweeps = WAY_OUT_SWEEPS;
+        // The step's iterates count both loops'.
+        let failed = info.convexification_iterations;
         let outcome = convexify(self, iterate, params, info);
+        info.convexification_iterations += failed;
         self.sweeps = 0;
         match outcome {
             Ok(iterate) => Ok(Some(iterate)),
@@ -941,7 +944,9 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         let laws = self.linearization.laws;
         // From the loop's second iterate on (the first starts from the previous step, whose
         // Γ_C rows do not hold this step's equations), the bounds of the slip that nonlinear
-        // Gauss–Seidel sweeps over Γ_C predict, where `solver.contact_sweeps` asks for them.
+        // Gauss–Seidel sweeps over Γ_C predict, where `solver.contact_sweeps` asks for them or
+        // the way out of a failed paper's loop runs them ([`Self::predicted_loop`]), until
+        // they stall.
         let sweeps = if m > 1 { self.sweeps } else { 0 };
         let first_bounds = if m == 1 { self.first_bounds.take() } else { None };
         let frozen = match self.anderson.take_bounds().or(first_bounds) {
