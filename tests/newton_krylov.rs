@@ -679,9 +679,9 @@ fn a_symmetric_sweep_carries_a_slip_front_along_the_contact_nodes() {
 /// one of these fronts the sweep does not carry), with no Newton on the law and no cutback.
 /// With `contact_sweeps = 1` from the start the predicted bounds stall in two steps (the
 /// iterates stop moving with the law not yet holding at them: a node the sweep relaxes to
-/// another local minimizer than the convex problem holds it at) and the paper's loop finishes
-/// each from there (without that, one step ran to the cap and was cut back). Both runs reach
-/// the same solution.
+/// another local minimizer than the convex problem holds it at) and the paper's bounds at the
+/// nodes where the law fails finish each from there (without that, one step ran to the cap and
+/// was cut back). Both runs reach the same solution.
 #[test]
 fn predicted_bounds_finish_the_steps_the_papers_loop_cannot_and_their_stalls_end_in_it() {
     let cap = "solver.max_convexification=120";
