@@ -503,3 +503,41 @@ fn long_steps_report_their_outer_iterations_and_the_header_names_the_linear_path
     assert_eq!(beats(&run("heartbeat-default", false, false).1), 0);
     assert_eq!(beats(&run("heartbeat-quiet", true, true).1), 0);
 }
+
+/// A step whose convexification loop does not converge within `solver.max_convexification`
+/// iterates, and which a way out finishes, says so in the log with what finished it: the 3D
+/// example on a slab of 64 × 4 × 4 cells on the iterative path, whose second step takes the
+/// paper's loop 140 iterates (a slip front along a row of contact nodes), capped at 100.
+#[test]
+fn a_step_a_way_out_finished_is_logged() {
+    let out = scratch("way-out");
+    let sets = [
+        "mesh.nx=64",
+        "mesh.ny=4",
+        "mesh.nz=4",
+        "time.steps=4",
+        "time.final_time=0.0625",
+        "solver.linear=iterative",
+        "solver.max_convexification=100",
+        "output.times=[0.0625]",
+        "output.vtk=false",
+    ];
+    let mut command = bin();
+    command
+        .args(["run", "scenarios/paper3d.toml", "--quiet", "--out"])
+        .arg(&out);
+    for set in sets {
+        command.args(["--set", set]);
+    }
+    let output = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(
+            "step 2 (t = 0.03125): the convexification loop did not converge in 100 iterates; the loop with predicted bounds finished the step"
+        ),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches("did not converge").count(), 1, "{stderr}");
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -281,6 +281,9 @@ fn march(
         for warning in o.recorder.watch(state, &step) {
             o.progress.log(format!("warning: {}", warning.message));
         }
+        if let Some(line) = o.recorder.way_out(&step) {
+            o.progress.log(line);
+        }
         o.progress.step(&step);
         let output = o.frames.step(state, &mut o.recorder.tally, &o.progress)?;
         o.checkpoints.step(state, &mut o.frames, &mut o.recorder)?;

@@ -159,6 +159,29 @@ impl<'a, 'p> Recorder<'a, 'p> {
         total
     }
 
+    /// The log line of a step whose convexification loop failed and a way out of the iterative
+    /// path finished it ([`crate::step`]'s Newton–Krylov solver: the loop with predicted
+    /// bounds, then Newton on the nonmonotone law); none where the loop converged.
+    pub fn way_out(&self, step: &StepRecord) -> Option<String> {
+        let failed = format!(
+            "step {} (t = {}): the convexification loop did not converge in {} iterates",
+            step.n, step.t, self.params.max_convexification
+        );
+        if step.nonmonotone_newton_iterations > 0 {
+            Some(format!(
+                "{failed}; Newton on the nonmonotone law finished the step ({} iterations)",
+                step.nonmonotone_newton_iterations
+            ))
+        } else if self.params.contact_sweeps == 0 && step.predicted_iterates > 0 {
+            Some(format!(
+                "{failed}; the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1` runs it from the start)",
+                step.predicted_iterates
+            ))
+        } else {
+            None
+        }
+    }
+
     /// The warnings the step to `state` (its record `step`) raises, kept in the tally.
     pub fn watch(&mut self, state: &State, step: &StepRecord) -> Vec<RunWarning> {
         let new = self.watch.check(self.problem, state, step, &self.tally.warnings);
