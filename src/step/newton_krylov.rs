@@ -70,7 +70,8 @@
 //! Newton iterations per step 8.25 / 5.75 / 5.62 at 47k unknowns, 9.06 / 6.25 / 5.81 at 98k,
 //! 12.8 (two steps cut back, to k/4) / 30.9 (a step of 101 iterates) / 7.06 (at most 6
 //! iterates) at 291k, 28.9 (three steps cut back, to k/8) / 77.1 (a step of 200 iterates, then
-//! Newton on the law) / 10.7 (at most 16) at 972k; the 16 steps at 972k took 330, 147 and 32 s.
+//! Newton on the law) / 10.7 (at most 16) at 972k; the 16 steps at 972k took 236, 91 and 18 s
+//! (`thermocontact bench --3d --steps-3d 16`, with `--contact-sweeps-3d 1` for the sweeps).
 //! On slabs long in x (`tests/newton_krylov.rs`), 80 × 8 × 8 cells: the longest step 154 / 76 /
 //! 7 iterates. Not every front: on 104 × 6 × 6 one step takes 98 iterates either way, a front
 //! that sheds its load through the bulk (which the sweep holds) more than through Γ_C's own
@@ -84,7 +85,7 @@
 //! start before Newton on the nonmonotone law is tried: a step the paper's loop converges in
 //! keeps its solution, and one it cannot (a front it crawls along at one node per iterate) is
 //! finished instead of cut back. The 3D example at 972k unknowns, 16 steps: three steps cut
-//! back (132, 70 and 90 s each) before, none after (48, 47 and 36 s, most of it the paper's
+//! back (91, 53 and 58 s each) before, none after (28, 27 and 28 s, most of it the paper's
 //! 200 iterates that fail); at 291k the two cut back steps likewise.
 //!
 //! Measured on the 3D example at k = 1/64, 4 steps, one forward sweep (before the backward
