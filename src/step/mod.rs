@@ -510,7 +510,8 @@ pub struct StepInfo {
     /// combination of the bounds (`solver.anderson_depth`).
     pub anderson_combinations: usize,
     /// Convexification iterates of the iterative path whose bounds the Gauss–Seidel sweeps over
-    /// Γ_C predicted (`solver.contact_sweeps`).
+    /// Γ_C predicted (`solver.contact_sweeps`, or the way out of a failed paper's loop, whose
+    /// step's `convexification_iterations` then count both loops').
     pub predicted_iterates: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
