@@ -317,6 +317,15 @@ mod tests {
         b.iter().zip(&ax).map(|(b, ax)| b - ax).collect()
     }
 
+    /// Tolerance 10⁻¹² of ‖b‖, at most 100 iterations, restarted every `restart`.
+    fn tight(restart: usize) -> GmresParams {
+        GmresParams {
+            rtol: 1e-12,
+            max_iterations: 100,
+            restart,
+        }
+    }
+
     /// A right-hand side of [`two_domains`]'s size with no zero entry.
     fn smooth_rhs() -> Vec<f64> {
         (0..10).map(|i| (i as f64 * 1.3).sin() + 0.5).collect()
@@ -328,11 +337,7 @@ mod tests {
     #[test]
     fn kept_vectors_give_a_fresh_solvers_bits() {
         let a = two_domains();
-        let params = GmresParams {
-            rtol: 1e-12,
-            max_iterations: 100,
-            restart: 4,
-        };
+        let params = tight(4);
         let rough = |seed: usize| -> Vec<f64> { (0..10).map(|i| ((i * 7 + seed * 3) % 11) as f64 - 5.0).collect() };
         let mut kept = Gmres::new(params);
         let mut x = vec![0.0; 10];
@@ -343,9 +348,7 @@ mod tests {
             let mut b = rough(seed);
             b[9] += nudge;
             // The residual of the warm start, given as a caller carrying it would.
-            let mut ax = vec![0.0; 10];
-            a.mul(&x, &mut ax);
-            let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, ax)| b - ax).collect();
+            let mut r = b_minus_a_x(&a, &b, &x);
             let info = kept.solve(&a, &Unpreconditioned, &b, &mut x, &mut r).unwrap();
             let fresh = gmres(&a, &Unpreconditioned, &b, &mut fresh_x, &params).unwrap();
             assert_eq!(info, fresh, "seed {seed}");
@@ -367,11 +370,7 @@ mod tests {
     #[test]
     fn the_residual_left_is_b_minus_a_x() {
         let a = two_domains();
-        let mut solver = Gmres::new(GmresParams {
-            rtol: 1e-12,
-            max_iterations: 100,
-            restart: 3,
-        });
+        let mut solver = Gmres::new(tight(3));
         let true_residual = |b: &[f64], x: &[f64]| b_minus_a_x(&a, b, x);
         let b = smooth_rhs();
         let (mut x, mut r) = (vec![0.0; 10], Vec::new());
@@ -395,11 +394,7 @@ mod tests {
     #[test]
     fn the_forcing_term_stops_a_solve_at_its_fraction_of_the_starting_residual() {
         let a = two_domains();
-        let params = GmresParams {
-            rtol: 1e-12,
-            max_iterations: 100,
-            restart: 30,
-        };
+        let params = tight(30);
         let true_residual = |b: &[f64], x: &[f64]| b_minus_a_x(&a, b, x);
         let b = smooth_rhs();
         let start: Vec<f64> = (0..10).map(|i| 0.1 * (i as f64 * 0.7).cos()).collect();
