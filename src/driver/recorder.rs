@@ -163,23 +163,23 @@ impl<'a, 'p> Recorder<'a, 'p> {
     /// path finished it ([`crate::step`]'s Newton–Krylov solver: the loop with predicted
     /// bounds, then Newton on the nonmonotone law); none where the loop converged.
     pub fn way_out(&self, step: &StepRecord) -> Option<String> {
-        let failed = format!(
-            "step {} (t = {}): the convexification loop did not converge in {} iterates",
-            step.n, step.t, self.params.max_convexification
-        );
-        if step.nonmonotone_newton_iterations > 0 {
-            Some(format!(
-                "{failed}; Newton on the nonmonotone law finished the step ({} iterations)",
+        let finished = if step.nonmonotone_newton_iterations > 0 {
+            format!(
+                "Newton on the nonmonotone law finished the step ({} iterations)",
                 step.nonmonotone_newton_iterations
-            ))
+            )
         } else if self.params.contact_sweeps == 0 && step.predicted_iterates > 0 {
-            Some(format!(
-                "{failed}; the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1` runs it from the start)",
+            format!(
+                "the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1` runs it from the start)",
                 step.predicted_iterates
-            ))
+            )
         } else {
-            None
-        }
+            return None;
+        };
+        Some(format!(
+            "step {} (t = {}): the convexification loop did not converge in {} iterates; {finished}",
+            step.n, step.t, self.params.max_convexification
+        ))
     }
 
     /// The warnings the step to `state` (its record `step`) raises, kept in the tally.

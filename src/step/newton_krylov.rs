@@ -817,15 +817,20 @@ impl<'a> NewtonKrylov<'a> {
     /// max_i |ξ_i − P_{g_i}(ξ_i − r_i w_i)| (stress units) for the bounds g: with g = b(|w|) the
     /// nonmonotone law itself.
     fn law_residual(&self, w: &[f64], xi: &[f64], bounds: &[f64]) -> f64 {
+        self.nodal_law_residuals(w, xi, bounds).fold(0.0, f64::max)
+    }
+
+    /// |ξ_i − P_{g_i}(ξ_i − r_i w_i)| at each contact node, in Γ_C's order.
+    fn nodal_law_residuals<'v>(
+        &'v self,
+        w: &'v [f64],
+        xi: &'v [f64],
+        bounds: &'v [f64],
+    ) -> impl Iterator<Item = f64> + 'v {
         let td = self.problem.dim() - 1;
-        (self.system.nodes.iter().enumerate()).fold(0.0, |worst, (i, node)| {
+        (self.system.nodes.iter().enumerate()).map(move |(i, node)| {
             let range = i * td..(i + 1) * td;
-            worst.max(node_law_residual(
-                &w[range.clone()],
-                &xi[range],
-                bounds[i],
-                node.augmentation,
-            ))
+            node_law_residual(&w[range.clone()], &xi[range], bounds[i], node.augmentation)
         })
     }
 }
@@ -908,22 +913,16 @@ impl SemismoothNewton<'_, '_> {
     /// from the next iterate on. Where it has stalled at the same nodes already, the rest of
     /// the step is the paper's loop.
     fn end_prediction_where_the_law_fails(&mut self, iterate: &AllUnknowns, bounds: &[f64]) {
-        let (solver, td) = (self.solver, self.linearization.td);
+        let solver = self.solver;
         let g_min = crate::model::law_scale(bounds.iter().copied()).max(f64::MIN_POSITIVE);
         if self.unpredicted.is_empty() {
             self.unpredicted = vec![false; bounds.len()];
         }
         let mut ended = 0;
-        for (i, node) in solver.system.nodes.iter().enumerate() {
-            let range = i * td..(i + 1) * td;
-            let law = node_law_residual(
-                &iterate.w[range.clone()],
-                &iterate.xi[range],
-                bounds[i],
-                node.augmentation,
-            );
-            if law > solver.tolerance * g_min && !self.unpredicted[i] {
-                self.unpredicted[i] = true;
+        let residuals = solver.nodal_law_residuals(&iterate.w, &iterate.xi, bounds);
+        for (unpredicted, law) in self.unpredicted.iter_mut().zip(residuals) {
+            if law > solver.tolerance * g_min && !*unpredicted {
+                *unpredicted = true;
                 ended += 1;
             }
         }
