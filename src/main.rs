@@ -156,6 +156,11 @@ enum Command {
         /// default: the scenario's 0, the paper's loop; docs/solvers.md).
         #[arg(long)]
         contact_sweeps_3d: Option<usize>,
+        /// Those sweeps with the step matrix condensed onto Γ_C through this many layers of the
+        /// body next to it (`solver.condensed_layers`; default: the scenario's 0, Γ_C's own
+        /// rows; docs/solvers.md).
+        #[arg(long)]
+        condensed_layers_3d: Option<usize>,
     },
     /// Convergence study on h = k = 1/2, 1/4, …, 1/2^N (Γ_C cut into 4/h parts): the paper's
     /// self-convergence study of Fig. 4 (errors against the finest level) and a manufactured
@@ -538,6 +543,14 @@ fn distributed_params(
              a run over {size} ranks needs solver.linear = \"iterative\" (or \"auto\"), or run it without mpirun"
         );
     }
+    if params.condensed_layers > 0 {
+        anyhow::bail!(
+            "solver.condensed_layers = {} runs on one process (an LU of the bulk rows next to Γ_C, which no rank \
+             holds): a run over {size} ranks needs solver.condensed_layers = 0 (its sweeps over Γ_C's own rows), \
+             or run it without mpirun",
+            params.condensed_layers
+        );
+    }
     params.linear = LinearKind::Iterative;
     params.krylov.distributed = true;
     Ok(params)
@@ -564,6 +577,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             preconditioners,
             friction_bound_3d,
             contact_sweeps_3d,
+            condensed_layers_3d,
         } => {
             if three_d {
                 let suite = Suite3d {
@@ -575,6 +589,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     preconditioners,
                     overrides: (friction_bound_3d.map(|s| format!("friction.bound={s}")).into_iter())
                         .chain(contact_sweeps_3d.map(|n| format!("solver.contact_sweeps={n}")))
+                        .chain(condensed_layers_3d.map(|n| format!("solver.condensed_layers={n}")))
                         .collect(),
                 };
                 bench_3d(&out, &suite)

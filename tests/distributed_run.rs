@@ -466,7 +466,7 @@ mod distributed {
     }
 
     /// The direct path over ranks is refused naming `solver.linear`, once, with a non-zero
-    /// status; a step forced not to converge (a Krylov cap of 2, no cutback) ends every rank
+    /// status, and the sweeps through the body naming `solver.condensed_layers`; a step forced not to converge (a Krylov cap of 2, no cutback) ends every rank
     /// with a non-zero status, the error once, and rank 0's folder says `failed`.
     #[test]
     fn the_direct_path_is_refused_and_a_failed_step_ends_every_rank() {
@@ -487,6 +487,16 @@ mod distributed {
         assert!(!refused.status.success(), "refused:\n{said}");
         assert_eq!(said.matches("error: solver.linear = \"direct\"").count(), 1, "{said}");
         assert!(!dir.join("direct").join("summary.json").exists(), "nothing written");
+        // Likewise the sweeps through the body, whose bulk rows no rank holds.
+        let refused = run(
+            2,
+            &dir.join("condensed"),
+            &small(&["solver.contact_sweeps=8", "solver.condensed_layers=2"]),
+        );
+        let said = text(&refused);
+        assert!(!refused.status.success(), "refused:\n{said}");
+        assert_eq!(said.matches("error: solver.condensed_layers = 2").count(), 1, "{said}");
+        assert!(!dir.join("condensed").join("summary.json").exists(), "nothing written");
 
         let failed = run(
             2,

@@ -694,3 +694,43 @@ fn predicted_bounds_finish_the_steps_the_papers_loop_cannot_and_their_stalls_end
     }
     assert_same_solution("104 × 6 × 6 slab", (&plain_summary, &plain), (&summary, &predicted));
 }
+
+/// On the 104 × 6 × 6 slab a front in step 14 crosses the slab through the body, not along
+/// Γ_C's own rows: the sweeps over those rows, which hold the body, move it one node per
+/// iterate however many there are (93 iterates with 8 sweeps). The same sweeps with the step
+/// matrix condensed onto Γ_C through two layers of the body (`solver.condensed_layers = 2`: a
+/// node that weakens sheds its load through the body within the sweep) carry it in a few (19),
+/// to the same solution (fields within 10 ε_conv, the stick/slip state at every output, the law
+/// at every step).
+#[test]
+fn sweeps_through_the_condensed_body_carry_a_front_the_contact_rows_alone_crawl_along() {
+    let sweeps = "solver.contact_sweeps=8";
+    let (rows_summary, rows) = long_slab(104, 6, &[sweeps]);
+    let (summary, condensed) = long_slab(104, 6, &[sweeps, "solver.condensed_layers=2"]);
+    assert!(
+        rows_summary.max_convexification_per_step > 60,
+        "the sweeps over Γ_C's rows should crawl here: {} iterates at most",
+        rows_summary.max_convexification_per_step
+    );
+    assert!(
+        summary.max_convexification_per_step <= 30,
+        "{} iterates in a step with the condensed rows",
+        summary.max_convexification_per_step
+    );
+    assert!(summary.cutbacks.is_empty() && rows_summary.cutbacks.is_empty());
+    assert_same_solution(
+        "104 × 6 × 6 slab, condensed",
+        (&rows_summary, &rows),
+        (&summary, &condensed),
+    );
+}
+
+/// `solver.condensed_layers` out of range is refused by key, value and what is expected.
+#[test]
+fn condensed_layers_are_bounded_with_a_clear_error() {
+    let error = refused("solver.condensed_layers=9");
+    assert!(
+        error.contains("solver.condensed_layers") && error.contains('9') && error.contains("at most 8"),
+        "{error}"
+    );
+}

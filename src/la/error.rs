@@ -50,6 +50,8 @@ pub enum FactorStage {
     IncompleteLu,
     /// An AMG hierarchy (PETSc's GAMG).
     Multigrid,
+    /// The sparse LU of the bulk rows next to Γ_C (the predicted bounds' condensed rows).
+    CondensedLayers,
 }
 
 impl std::fmt::Display for FactorStage {
@@ -62,6 +64,7 @@ impl std::fmt::Display for FactorStage {
             FactorStage::Cholesky => "the dense Cholesky factor",
             FactorStage::IncompleteLu => "the incomplete LU factor ILU(0)",
             FactorStage::Multigrid => "the AMG hierarchy (PETSc GAMG)",
+            FactorStage::CondensedLayers => "the LU of the bulk layers next to Γ_C (solver.condensed_layers)",
         })
     }
 }

@@ -649,6 +649,7 @@ impl Scenario {
             },
             anderson_depth: s.anderson_depth,
             contact_sweeps: s.contact_sweeps,
+            condensed_layers: s.condensed_layers,
         }
     }
 

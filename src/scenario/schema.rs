@@ -646,6 +646,7 @@ pub struct SolverSpec {
     pub overlap: usize,
     pub anderson_depth: usize,
     pub contact_sweeps: usize,
+    pub condensed_layers: usize,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

@@ -21,6 +21,11 @@ pub const MAX_ANDERSON_DEPTH: usize = 8;
 /// 349 and 331 with one, two and four symmetric ones).
 pub const MAX_CONTACT_SWEEPS: usize = 8;
 
+/// The most layers of bulk unknowns `solver.condensed_layers` condenses through (two carry what
+/// matters: at 47k unknowns and k = 1/8, 105 Newton iterations over 8 steps with 2, 101 with 4,
+/// 99 with the whole body; each layer adds about |Γ_C| nodes to the LU, `step::contact_condensation`).
+pub const MAX_CONDENSED_LAYERS: usize = 8;
+
 /// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
 /// right-hand side multiplied by others (ρ/k, k·E, lengths to the power d); beyond this the
 /// products overflow or swamp each other and the step matrix turns singular in floating point.
@@ -315,6 +320,13 @@ impl Scenario {
                 "solver.contact_sweeps",
                 &s.contact_sweeps,
                 &format!("at most {MAX_CONTACT_SWEEPS} (0: the paper's loop, without predicted bounds)"),
+            ));
+        }
+        if s.condensed_layers > MAX_CONDENSED_LAYERS {
+            return Err(invalid(
+                "solver.condensed_layers",
+                &s.condensed_layers,
+                &format!("at most {MAX_CONDENSED_LAYERS} (0: the sweeps over Γ_C's own rows, the body held)"),
             ));
         }
         if s.overlap > MAX_OVERLAP {

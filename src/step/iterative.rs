@@ -25,10 +25,11 @@
 //! tolerance and a hard step (47k, k = 1/8) that Newton on the law then no longer finishes
 //! (docs/performance.md).
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::amg::VelocityAmg;
+use super::contact_condensation::{condense, CondensedRows};
 use super::direct::{contact_tangential_unknowns, SystemStats};
 use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, StepFailure};
 use crate::la::{gmres, level_bisection, CsrMatrix, FactorStage, Gmres, Ilu0, LaError, NodeGraph, Part, SolveInfo};
@@ -72,6 +73,9 @@ pub struct KrylovSystem {
     /// `auto` resolved to it).
     amg: Option<VelocityAmg>,
     stats: Mutex<SystemStats>,
+    /// The step matrix condensed onto Γ_C through the bulk layers next to it, for the predicted
+    /// bounds' sweeps, with its layer count: computed at the first sweep that asks for it.
+    condensed: Mutex<Option<(usize, Arc<CondensedRows>)>>,
 }
 
 /// What solves Ã x = b̃ by GMRES: this process, with the ILU(0) of Ã (and the AMG's coarse
@@ -323,7 +327,32 @@ impl KrylovSystem {
             work: Mutex::new((a, solver)),
             amg,
             stats: Mutex::new(SystemStats::default()),
+            condensed: Mutex::new(None),
         })
+    }
+
+    /// A condensed onto Γ_C's tangential unknowns through `layers` layers of the body next to
+    /// Γ_C ([`super::contact_condensation`]), from `a` (Ã: its bulk rows are A's, its Γ_C rows
+    /// A's in `base`); computed once per step size and layer count. Not on the ranks of a
+    /// distributed run, which keep no bulk rows but their own (the setting is refused there).
+    pub(super) fn condensed_rows(&self, a: &CsrMatrix, layers: usize) -> Result<Arc<CondensedRows>, LaError> {
+        let mut cached = self.condensed.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((l, rows)) = cached.as_ref() {
+            if *l == layers {
+                return Ok(Arc::clone(rows));
+            }
+        }
+        let first = self.first_contact;
+        let row = |r: usize| {
+            if r >= first {
+                (a.row(r).0, &self.base[a.offset_from(first, r)])
+            } else {
+                a.row(r)
+            }
+        };
+        let rows = Arc::new(condense(row, self.order.len(), first, layers)?);
+        *cached = Some((layers, Arc::clone(&rows)));
+        Ok(rows)
     }
 
     /// The step size k.

@@ -20,6 +20,7 @@ pub mod abort;
 mod amg;
 mod anderson;
 mod condensed;
+mod contact_condensation;
 mod convexification;
 mod descent;
 mod direct;
@@ -454,6 +455,10 @@ pub struct SolverParams {
     /// iterative path's convexification loop after its first (0: the paper's loop; another
     /// rule where a step has several solutions: docs/solvers.md).
     pub contact_sweeps: usize,
+    /// The layers of bulk unknowns next to Γ_C through which those sweeps see the body follow
+    /// (the step matrix condensed onto Γ_C through them, `contact_condensation`; 0: Γ_C's own
+    /// rows of the step matrix, the body held).
+    pub condensed_layers: usize,
 }
 
 impl SolverParams {
@@ -481,6 +486,7 @@ impl Default for SolverParams {
             krylov: KrylovParams::default(),
             anderson_depth: 2,
             contact_sweeps: 0,
+            condensed_layers: 0,
         }
     }
 }
