@@ -734,3 +734,45 @@ fn condensed_layers_are_bounded_with_a_clear_error() {
         "{error}"
     );
 }
+
+/// At a coarse k (1/8: the body's stiffness weighs more than its mass, and fronts cross it) the
+/// sweeps through two layers of the body keep the loop's iterates per step bounded under
+/// refinement: at most 8 in every step on 24 × 6 × 6 and on 40 × 10 × 10 cells (measured 5 and
+/// 6, 8 steps), where one sweep over Γ_C's own rows takes a step of 31 iterates on the finer
+/// mesh (8 sweeps over them: 19); no cutback, and the law at every step.
+#[test]
+fn sweeps_through_the_body_bound_the_iterates_per_step_at_a_coarse_k_under_refinement() {
+    let coarse_k = |nx: usize, sets: &[&str]| {
+        let base = [
+            format!("mesh.nx={nx}"),
+            format!("mesh.ny={}", nx / 4),
+            format!("mesh.nz={}", nx / 4),
+            "time.steps=8".into(),
+            "time.final_time=1".into(),
+            "output.times=[1]".into(),
+        ];
+        let all: Vec<&str> = base.iter().map(String::as_str).chain(sets.iter().copied()).collect();
+        run(Some(PAPER3D), &all, "iterative").0
+    };
+    let through = ["solver.contact_sweeps=8", "solver.condensed_layers=2"];
+    for nx in [24, 40] {
+        let summary = coarse_k(nx, &through);
+        assert!(
+            summary.max_convexification_per_step <= 8,
+            "nx = {nx}: {} iterates in a step",
+            summary.max_convexification_per_step
+        );
+        assert!(summary.cutbacks.is_empty(), "nx = {nx}: {:?}", summary.cutbacks);
+        assert!(
+            summary.max_law_residual <= 1e-6,
+            "nx = {nx}: law {}",
+            summary.max_law_residual
+        );
+    }
+    let rows = coarse_k(40, &["solver.contact_sweeps=1"]);
+    assert!(
+        rows.max_convexification_per_step > 20,
+        "one sweep over Γ_C's rows: {} iterates at most",
+        rows.max_convexification_per_step
+    );
+}
