@@ -369,6 +369,17 @@ fn newton_on_the_law_finishes_the_steps_the_loop_cannot() {
 /// edges and the free end over about 40 % of the face, the same on every fine enough mesh
 /// (docs/performance.md, "The slip zone under refinement"), unlike the example's own boundary
 /// ring. 4 steps of `inverse_k`.
+/// The 3D example on nx × ny × ny cells, on the iterative path, with the keys `sets`.
+fn example_3d(nx: usize, ny: usize, sets: &[&str]) -> (Summary, State) {
+    let mesh = [
+        format!("mesh.nx={nx}"),
+        format!("mesh.ny={ny}"),
+        format!("mesh.nz={ny}"),
+    ];
+    let all: Vec<&str> = mesh.iter().map(String::as_str).chain(sets.iter().copied()).collect();
+    run(Some(PAPER3D), &all, "iterative")
+}
+
 fn resolved_zone(nx: usize, inverse_k: usize, anderson_depth: usize) -> (Summary, State) {
     resolved_zone_with(nx, inverse_k, anderson_depth, 0)
 }
@@ -378,9 +389,6 @@ fn resolved_zone_with(nx: usize, inverse_k: usize, anderson_depth: usize, contac
     let k = 1.0 / inverse_k as f64;
     let times: Vec<String> = (1..=4).map(|n| format!("{}", n as f64 * k)).collect();
     let sets = [
-        format!("mesh.nx={nx}"),
-        format!("mesh.ny={}", nx / 4),
-        format!("mesh.nz={}", nx / 4),
         "friction.bound=8".into(),
         "time.steps=4".into(),
         format!("time.final_time={}", 4.0 * k),
@@ -389,7 +397,7 @@ fn resolved_zone_with(nx: usize, inverse_k: usize, anderson_depth: usize, contac
         format!("solver.contact_sweeps={contact_sweeps}"),
     ];
     let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
-    run(Some(PAPER3D), &sets, "iterative")
+    example_3d(nx, nx / 4, &sets)
 }
 
 /// Where the slip zone converges, the convexification loop's iterations per step stay bounded
@@ -521,13 +529,17 @@ fn predicted_bounds_return_solutions_of_the_law_where_a_step_has_several() {
     assert!(summary.max_law_residual <= 1e-6, "{:e}", summary.max_law_residual);
 }
 
+/// `solver.contact_sweeps` and `solver.condensed_layers` out of range are refused by key, value
+/// and what is expected.
 #[test]
-fn the_contact_sweeps_are_bounded_with_a_clear_error() {
-    let error = refused("solver.contact_sweeps=9");
-    assert!(
-        error.contains("solver.contact_sweeps") && error.contains('9') && error.contains("at most 8"),
-        "{error}"
-    );
+fn the_sweep_settings_are_bounded_with_a_clear_error() {
+    for key in ["solver.contact_sweeps", "solver.condensed_layers"] {
+        let error = refused(&format!("{key}=9"));
+        assert!(
+            error.contains(key) && error.contains('9') && error.contains("at most 8"),
+            "{error}"
+        );
+    }
 }
 
 /// The Newton iterations' solves stopped at the forcing term (`solver.krylov_forcing`, default
@@ -635,16 +647,12 @@ fn a_step_solved_again_starts_from_its_last_solution() {
 /// The 3D example on a slab long in x, `nx × ny × ny` cells, 16 steps of the paper's k = 1/64,
 /// with an output every 4 steps; `sets` added.
 fn long_slab(nx: usize, ny: usize, sets: &[&str]) -> (Summary, State) {
-    let base = [
-        format!("mesh.nx={nx}"),
-        format!("mesh.ny={ny}"),
-        format!("mesh.nz={ny}"),
-        "time.steps=16".into(),
-        "time.final_time=0.25".into(),
-        "output.times=[0.0625, 0.125, 0.1875, 0.25]".into(),
+    let steps = [
+        "time.steps=16",
+        "time.final_time=0.25",
+        "output.times=[0.0625, 0.125, 0.1875, 0.25]",
     ];
-    let all: Vec<&str> = base.iter().map(String::as_str).chain(sets.iter().copied()).collect();
-    run(Some(PAPER3D), &all, "iterative")
+    example_3d(nx, ny, &[&steps[..], sets].concat())
 }
 
 /// On a slab long in x (80 × 8 × 8 cells) a slip front runs along a row of contact nodes in
@@ -659,18 +667,34 @@ fn long_slab(nx: usize, ny: usize, sets: &[&str]) -> (Summary, State) {
 fn a_symmetric_sweep_carries_a_slip_front_along_the_contact_nodes() {
     let (plain_summary, plain) = long_slab(80, 8, &[]);
     let (summary, predicted) = long_slab(80, 8, &["solver.contact_sweeps=1"]);
+    assert_front_carried(
+        "80 × 8 × 8 slab",
+        (&plain_summary, &plain),
+        (&summary, &predicted),
+        (50, 10),
+    );
+}
+
+/// The front crawls in the run `slow` (its longest step more than `crawl` iterates) and the
+/// run `fast` carries it (at most `carried` iterates in every step), neither cut back, to the
+/// same solution ([`assert_same_solution`]).
+fn assert_front_carried(
+    case: &str,
+    slow: (&Summary, &State),
+    fast: (&Summary, &State),
+    (crawl, carried): (usize, usize),
+) {
+    let (slowest, fastest) = (slow.0.max_convexification_per_step, fast.0.max_convexification_per_step);
     assert!(
-        plain_summary.max_convexification_per_step > 50,
-        "the paper's loop should crawl along a front here: {} iterates at most",
-        plain_summary.max_convexification_per_step
+        slowest > crawl,
+        "{case}: the slower loop should crawl here: {slowest} iterates at most"
     );
     assert!(
-        summary.max_convexification_per_step <= 10,
-        "{} iterates in a step with predicted bounds",
-        summary.max_convexification_per_step
+        fastest <= carried,
+        "{case}: {fastest} iterates in a step where the front is carried"
     );
-    assert!(summary.cutbacks.is_empty() && plain_summary.cutbacks.is_empty());
-    assert_same_solution("80 × 8 × 8 slab", (&plain_summary, &plain), (&summary, &predicted));
+    assert!(slow.0.cutbacks.is_empty() && fast.0.cutbacks.is_empty(), "{case}");
+    assert_same_solution(case, slow, fast);
 }
 
 /// On a thinner slab (104 × 6 × 6 cells, the loop capped at 120 iterates) the paper's loop fails
@@ -707,32 +731,8 @@ fn sweeps_through_the_condensed_body_carry_a_front_the_contact_rows_alone_crawl_
     let sweeps = "solver.contact_sweeps=8";
     let (rows_summary, rows) = long_slab(104, 6, &[sweeps]);
     let (summary, condensed) = long_slab(104, 6, &[sweeps, "solver.condensed_layers=2"]);
-    assert!(
-        rows_summary.max_convexification_per_step > 60,
-        "the sweeps over Γ_C's rows should crawl here: {} iterates at most",
-        rows_summary.max_convexification_per_step
-    );
-    assert!(
-        summary.max_convexification_per_step <= 30,
-        "{} iterates in a step with the condensed rows",
-        summary.max_convexification_per_step
-    );
-    assert!(summary.cutbacks.is_empty() && rows_summary.cutbacks.is_empty());
-    assert_same_solution(
-        "104 × 6 × 6 slab, condensed",
-        (&rows_summary, &rows),
-        (&summary, &condensed),
-    );
-}
-
-/// `solver.condensed_layers` out of range is refused by key, value and what is expected.
-#[test]
-fn condensed_layers_are_bounded_with_a_clear_error() {
-    let error = refused("solver.condensed_layers=9");
-    assert!(
-        error.contains("solver.condensed_layers") && error.contains('9') && error.contains("at most 8"),
-        "{error}"
-    );
+    let case = "104 × 6 × 6 slab, through the body";
+    assert_front_carried(case, (&rows_summary, &rows), (&summary, &condensed), (60, 30));
 }
 
 /// At a coarse k (1/8: the body's stiffness weighs more than its mass, and fronts cross it) the
@@ -743,16 +743,8 @@ fn condensed_layers_are_bounded_with_a_clear_error() {
 #[test]
 fn sweeps_through_the_body_bound_the_iterates_per_step_at_a_coarse_k_under_refinement() {
     let coarse_k = |nx: usize, sets: &[&str]| {
-        let base = [
-            format!("mesh.nx={nx}"),
-            format!("mesh.ny={}", nx / 4),
-            format!("mesh.nz={}", nx / 4),
-            "time.steps=8".into(),
-            "time.final_time=1".into(),
-            "output.times=[1]".into(),
-        ];
-        let all: Vec<&str> = base.iter().map(String::as_str).chain(sets.iter().copied()).collect();
-        run(Some(PAPER3D), &all, "iterative").0
+        let steps = ["time.steps=8", "time.final_time=1", "output.times=[1]"];
+        example_3d(nx, nx / 4, &[&steps[..], sets].concat()).0
     };
     let through = ["solver.contact_sweeps=8", "solver.condensed_layers=2"];
     for nx in [24, 40] {
