@@ -15,10 +15,12 @@ pub const MAX_CUTBACK_DEPTH: usize = 20;
 /// iterates (depth 2 and 3 took the same iterations on the 3D example, `step::anderson`).
 pub const MAX_ANDERSON_DEPTH: usize = 8;
 
-/// The most Gauss–Seidel sweeps over Γ_C `solver.contact_sweeps` takes (more gain little: 27, 23
-/// and 22 Newton iterations over 4 steps of the 3D example at 291k unknowns with one, two and
-/// four forward sweeps, 32 with one or two at 972k; a slab of 104 × 6 × 6 cells, 16 steps: 382,
-/// 349 and 331 with one, two and four symmetric ones).
+/// The most Gauss–Seidel sweeps over Γ_C `solver.contact_sweeps` takes. Over Γ_C's own rows
+/// more gain little (27, 23 and 22 Newton iterations over 4 steps of the 3D example at 291k
+/// unknowns with one, two and four forward sweeps, 32 with one or two at 972k; a slab of 104 ×
+/// 6 × 6 cells, 16 steps: 382, 349 and 331 with one, two and four symmetric ones); through the
+/// body (`solver.condensed_layers`) 8 carry fronts that fewer do not (that slab: 320, 220, 170
+/// and 139 with 1, 2, 4 and 8).
 pub const MAX_CONTACT_SWEEPS: usize = 8;
 
 /// The most layers of bulk unknowns `solver.condensed_layers` condenses through (two carry what

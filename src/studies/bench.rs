@@ -230,6 +230,20 @@ pub fn hard_cases() -> Vec<HardCase> {
                 "solver.contact_sweeps=1",
             ],
         ),
+        case(
+            "3d-condensed",
+            "the same with 8 sweeps through two layers of the body (solver.contact_sweeps = 8, solver.condensed_layers = 2)",
+            Some("scenarios/paper3d.toml"),
+            &[
+                cells[0],
+                cells[1],
+                cells[2],
+                cells[3],
+                "solver.linear=iterative",
+                "solver.contact_sweeps=8",
+                "solver.condensed_layers=2",
+            ],
+        ),
     ]
 }
 
