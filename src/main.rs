@@ -543,14 +543,6 @@ fn distributed_params(
              a run over {size} ranks needs solver.linear = \"iterative\" (or \"auto\"), or run it without mpirun"
         );
     }
-    if params.condensed_layers > 0 {
-        anyhow::bail!(
-            "solver.condensed_layers = {} runs on one process (an LU of the bulk rows next to Γ_C, which no rank \
-             holds): a run over {size} ranks needs solver.condensed_layers = 0 (its sweeps over Γ_C's own rows), \
-             or run it without mpirun",
-            params.condensed_layers
-        );
-    }
     params.linear = LinearKind::Iterative;
     params.krylov.distributed = true;
     Ok(params)

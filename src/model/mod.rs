@@ -44,7 +44,7 @@ pub use laws::{
 };
 pub use pressure::ContactPressure;
 pub use problem::*;
-pub use share::ColumnShare;
+pub use share::{nodes_within, ColumnShare};
 pub use state::State;
 pub use step_matrix::{
     assemble_by_columns, ordered_rows, ordered_rows_at, ordered_rows_range, rows_of_symmetric_form,

@@ -243,6 +243,9 @@ pub struct ProblemBuilder {
     /// Whose share of the matrices to assemble ([`ProblemBuilder::owned_nodes`],
     /// [`ProblemBuilder::on_ranks`]); `None`: the whole.
     share: Option<ShareOf>,
+    /// The layers of nodes around Γ_C whose rows a share assembles too
+    /// ([`ProblemBuilder::contact_layers`]).
+    contact_layers: usize,
 }
 
 /// The process a [`ProblemBuilder`] assembles a share of the matrices for.
@@ -298,6 +301,7 @@ impl ProblemBuilder {
             initial_fields: None,
             extra_loads: None,
             share: None,
+            contact_layers: 0,
         }
     }
 
@@ -310,6 +314,15 @@ impl ProblemBuilder {
     #[cfg(feature = "mpi")]
     pub fn on_ranks(mut self, comm: crate::la::mpi::Communicator) -> Self {
         self.share = (comm.size() > 1).then_some(ShareOf::Rank(comm));
+        self
+    }
+
+    /// A share of the matrices (`ProblemBuilder::on_ranks`) that also reads the rows of the
+    /// nodes within `layers` hops of Γ_C: what the predicted bounds' sweeps through the body
+    /// condense (`solver.condensed_layers`, the same number; `KrylovParams::condensed_layers`).
+    /// No effect on the whole problem.
+    pub fn contact_layers(mut self, layers: usize) -> Self {
+        self.contact_layers = layers;
         self
     }
 
@@ -603,7 +616,8 @@ impl ProblemBuilder {
                         nodes: mesh.n_nodes(),
                     });
                 }
-                Some(ColumnShare::new(&mesh, owned, &mesh.nodes_on(&parts.contact)))
+                let rows = super::nodes_within(&mesh, mesh.nodes_on(&parts.contact), self.contact_layers);
+                Some(ColumnShare::new(&mesh, owned, &rows))
             }
             #[cfg(feature = "mpi")]
             Some(ShareOf::Rank(comm)) => {
@@ -612,7 +626,8 @@ impl ProblemBuilder {
                     detail: e.to_string(),
                 })?;
                 let owned = split.node_owner.iter().map(|&r| r == comm.rank()).collect();
-                let share = ColumnShare::new(&mesh, owned, &mesh.nodes_on(&parts.contact));
+                let rows = super::nodes_within(&mesh, mesh.nodes_on(&parts.contact), self.contact_layers);
+                let share = ColumnShare::new(&mesh, owned, &rows);
                 let _ = partition.set(split);
                 Some(share.over_ranks(comm))
             }

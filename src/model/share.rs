@@ -231,6 +231,13 @@ fn around(mesh: &Mesh, rows: &[bool]) -> (Vec<bool>, Vec<u32>) {
     (kept, cells)
 }
 
+/// The nodes within `hops` hops of `nodes`, a node one hop from every node of a cell it is in:
+/// the rows a rank assembles around Γ_C for the predicted bounds' condensation (its layers of
+/// the body, `crate::step`'s `contact_condensation`).
+pub fn nodes_within(mesh: &Mesh, nodes: Vec<bool>, hops: usize) -> Vec<bool> {
+    (0..hops).fold(nodes, |nodes, _| columns_read_by(mesh, &nodes))
+}
+
 /// The columns that the rows of the nodes `rows` read: the nodes of the cells that hold one of
 /// them (a share's own and Γ_C's rows, [`ColumnShare::kept`]; Γ_C's alone for the contact
 /// pressure's rows).

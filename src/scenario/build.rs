@@ -588,7 +588,8 @@ impl Scenario {
         if continued {
             scenario.initial.from = None;
         }
-        scenario.build_from(scenario.builder()?.on_ranks(comm))
+        let layers = scenario.solver.condensed_layers;
+        scenario.build_from(scenario.builder()?.on_ranks(comm).contact_layers(layers))
     }
 
     /// The problem of `builder`, its errors named by the scenario's keys.
@@ -645,11 +646,11 @@ impl Scenario {
                 max_iterations: s.max_krylov,
                 preconditioner: s.preconditioner,
                 overlap: s.overlap,
+                condensed_layers: s.condensed_layers,
                 ..KrylovParams::default()
             },
             anderson_depth: s.anderson_depth,
             contact_sweeps: s.contact_sweeps,
-            condensed_layers: s.condensed_layers,
         }
     }
 

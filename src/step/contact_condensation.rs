@@ -67,7 +67,7 @@ impl CondensedRows {
 
 /// S_L (module header) of the system whose row r is `row(r)` (columns and values of A, the
 /// system's order, `n` unknowns, Γ_C's tangential unknowns from `first` on), through the bulk
-/// unknowns within `layers` ≥ 1 hops of Γ_C.
+/// unknowns within `layers` hops of Γ_C (0: A_TT itself).
 pub(super) fn condense<'r>(
     row: impl Fn(usize) -> (&'r [u32], &'r [f64]),
     n: usize,

@@ -73,9 +73,12 @@ pub struct KrylovSystem {
     /// `auto` resolved to it).
     amg: Option<VelocityAmg>,
     stats: Mutex<SystemStats>,
-    /// The step matrix condensed onto Γ_C through the bulk layers next to it, for the predicted
-    /// bounds' sweeps, with its layer count: computed at the first sweep that asks for it.
-    condensed: Mutex<Option<(usize, Arc<CondensedRows>)>>,
+    /// The layers of the body the predicted bounds' sweeps condense through
+    /// ([`KrylovParams::condensed_layers`]; 0: none).
+    condensed_layers: usize,
+    /// The step matrix condensed onto Γ_C through them: in one process computed at the first
+    /// sweep, on the ranks at set-up (from the layers' rows, assembled there for it alone).
+    condensed: Mutex<Option<Arc<CondensedRows>>>,
 }
 
 /// What solves Ã x = b̃ by GMRES: this process, with the ILU(0) of Ã (and the AMG's coarse
@@ -196,7 +199,7 @@ fn ranks_system(
     k: f64,
     (order, position, first_contact): (&[usize], &[usize], usize),
     params: &KrylovParams,
-) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CondensedRows>), StepError> {
     use super::ranks::{RankKrylov, RankRows};
     use crate::la::mpi::{DistributedKrylov, DistributedPreconditioner};
     let krylov = |preconditioner, rtol, max_iterations| DistributedKrylov {
@@ -219,7 +222,17 @@ fn ranks_system(
     let theta_rows: Vec<usize> = (problem.contact.iter())
         .filter_map(|node| node.theta_dof.map(|r| position[n_w + r]))
         .collect();
-    let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &rows.assembled(first_contact, &theta_rows));
+    // The predicted bounds' condensation, on every rank the same, from the rows of its layers
+    // of the body, assembled for it alone (the problem's share reads them:
+    // `ProblemBuilder::contact_layers`).
+    let layer_rows = condensation_rows(problem, position, params.condensed_layers)?;
+    let assembled = rows.assembled(first_contact, &[&theta_rows[..], &layer_rows].concat());
+    let (a, rhs) = crate::model::ordered_rows_at(problem, k, order, &assembled);
+    let n = order.len();
+    let condensed = match params.condensed_layers {
+        0 => None,
+        layers => Some(condense(|r| a.row(r), n, first_contact, layers)?),
+    };
     let (mut ranks, a) = RankKrylov::new(
         rows,
         (a, first_contact, &theta_rows),
@@ -241,7 +254,39 @@ fn ranks_system(
             ranks.set_velocity_amg(problem, k, order)?;
         }
     }
-    Ok((a, rhs, KrylovSolver::Ranks(ranks)))
+    Ok((a, rhs, KrylovSolver::Ranks(ranks), condensed))
+}
+
+/// The system rows (`position` of each unknown) of the nodes within `layers` hops of Γ_C, which
+/// a rank assembles for the condensation; an error where the problem's share does not read
+/// their columns (built without [`crate::model::ProblemBuilder::contact_layers`] of as many).
+#[cfg(feature = "mpi")]
+fn condensation_rows(problem: &Problem, position: &[usize], layers: usize) -> Result<Vec<usize>, StepError> {
+    if layers == 0 {
+        return Ok(Vec::new());
+    }
+    let mesh = &problem.mesh;
+    let mut contact = vec![false; mesh.n_nodes()];
+    problem.contact.iter().for_each(|node| contact[node.node] = true);
+    let around = crate::model::nodes_within(mesh, contact, layers);
+    if let Some(share) = &problem.columns {
+        let read = crate::model::nodes_within(mesh, around.clone(), 1);
+        if read.iter().zip(share.kept()).any(|(&needed, &kept)| needed && !kept) {
+            return Err(LaError::Factorization {
+                stage: FactorStage::CondensedLayers,
+                detail: format!(
+                    "solver.condensed_layers = {layers} reads rows of the body this rank's share of the problem \
+                     does not hold: build the problem with ProblemBuilder::contact_layers({layers})"
+                ),
+            }
+            .into());
+        }
+    }
+    let mut unknowns = Vec::new();
+    (0..mesh.n_nodes())
+        .filter(|&p| around[p])
+        .for_each(|p| crate::model::node_unknowns(problem, p, &mut unknowns));
+    Ok(unknowns.into_iter().map(|u| position[u]).collect())
 }
 
 /// Without the `mpi` feature there are no ranks: a distributed system is refused.
@@ -251,7 +296,7 @@ fn ranks_system(
     _k: f64,
     _system: (&[usize], &[usize], usize),
     _params: &KrylovParams,
-) -> Result<(CsrMatrix, StepRhs, KrylovSolver), StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CondensedRows>), StepError> {
     Err(LaError::Petsc {
         operation: "MPI_Init",
         detail: "this build has no MPI: build thermocontact with `--features mpi` for a distributed run".into(),
@@ -277,9 +322,9 @@ impl KrylovSystem {
         let mut position = vec![0; n];
         order.iter().enumerate().for_each(|(new, &old)| position[old] = new);
 
-        let (a, rhs, solver, amg) = if params.distributed {
-            let (a, rhs, solver) = ranks_system(problem, k, (&order, &position, first_contact), &params)?;
-            (a, rhs, solver, None)
+        let (a, rhs, solver, amg, condensed) = if params.distributed {
+            let (a, rhs, solver, condensed) = ranks_system(problem, k, (&order, &position, first_contact), &params)?;
+            (a, rhs, solver, None, condensed)
         } else {
             let (a, rhs) = ordered_rows(problem, k, &order);
             let ilu = Ilu0::with_domains(&a, parts)?;
@@ -294,7 +339,7 @@ impl KrylovSystem {
                 None
             };
             let gmres = Box::new(Gmres::new(params.gmres()));
-            (a, rhs, KrylovSolver::Process { ilu, gmres }, amg)
+            (a, rhs, KrylovSolver::Process { ilu, gmres }, amg, None)
         };
         let base = a.values_from(first_contact).to_vec();
         let nodes = (problem.contact.iter())
@@ -327,20 +372,22 @@ impl KrylovSystem {
             work: Mutex::new((a, solver)),
             amg,
             stats: Mutex::new(SystemStats::default()),
-            condensed: Mutex::new(None),
+            condensed_layers: params.condensed_layers,
+            condensed: Mutex::new(condensed.map(Arc::new)),
         })
     }
 
-    /// A condensed onto Γ_C's tangential unknowns through `layers` layers of the body next to
-    /// Γ_C ([`super::contact_condensation`]), from `a` (Ã: its bulk rows are A's, its Γ_C rows
-    /// A's in `base`); computed once per step size and layer count. Not on the ranks of a
-    /// distributed run, which keep no bulk rows but their own (the setting is refused there).
-    pub(super) fn condensed_rows(&self, a: &CsrMatrix, layers: usize) -> Result<Arc<CondensedRows>, LaError> {
+    /// A condensed onto Γ_C's tangential unknowns through [`KrylovParams::condensed_layers`]
+    /// layers of the body next to Γ_C ([`super::contact_condensation`]), once per step size;
+    /// `None` where the setting is 0. In one process from `a` (Ã: its bulk rows are A's, its
+    /// Γ_C rows A's in `base`) at the first call; on the ranks the set-up's.
+    pub(super) fn condensed_rows(&self, a: &CsrMatrix) -> Result<Option<Arc<CondensedRows>>, LaError> {
+        if self.condensed_layers == 0 {
+            return Ok(None);
+        }
         let mut cached = self.condensed.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((l, rows)) = cached.as_ref() {
-            if *l == layers {
-                return Ok(Arc::clone(rows));
-            }
+        if let Some(rows) = cached.as_ref() {
+            return Ok(Some(Arc::clone(rows)));
         }
         let first = self.first_contact;
         let row = |r: usize| {
@@ -350,9 +397,9 @@ impl KrylovSystem {
                 a.row(r)
             }
         };
-        let rows = Arc::new(condense(row, self.order.len(), first, layers)?);
-        *cached = Some((layers, Arc::clone(&rows)));
-        Ok(rows)
+        let rows = Arc::new(condense(row, self.order.len(), first, self.condensed_layers)?);
+        *cached = Some(Arc::clone(&rows));
+        Ok(Some(rows))
     }
 
     /// The step size k.

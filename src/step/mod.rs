@@ -96,6 +96,11 @@ pub struct KrylovParams {
     /// at 972k unknowns on 2 ranks, 304 Krylov iterations against block Jacobi's 344 (one
     /// process: 303). Not read in one process.
     pub overlap: usize,
+    /// The layers of bulk unknowns next to Γ_C through which the predicted bounds' sweeps see
+    /// the body follow (`solver.condensed_layers`: the step matrix condensed onto Γ_C through
+    /// them, `contact_condensation`; at the first sweep in one process, at set-up on the ranks,
+    /// which then also assemble those layers' rows). Default 0: Γ_C's own rows, the body held.
+    pub condensed_layers: usize,
 }
 
 /// The largest [`KrylovParams::overlap`] there is.
@@ -149,6 +154,7 @@ impl Default for KrylovParams {
             preconditioner: PreconditionerKind::Ilu,
             distributed: false,
             overlap: 1,
+            condensed_layers: 0,
         }
     }
 }
@@ -455,10 +461,6 @@ pub struct SolverParams {
     /// iterative path's convexification loop after its first (0: the paper's loop; another
     /// rule where a step has several solutions: docs/solvers.md).
     pub contact_sweeps: usize,
-    /// The layers of bulk unknowns next to Γ_C through which those sweeps see the body follow
-    /// (the step matrix condensed onto Γ_C through them, `contact_condensation`; 0: Γ_C's own
-    /// rows of the step matrix, the body held).
-    pub condensed_layers: usize,
 }
 
 impl SolverParams {
@@ -486,7 +488,6 @@ impl Default for SolverParams {
             krylov: KrylovParams::default(),
             anderson_depth: 2,
             contact_sweeps: 0,
-            condensed_layers: 0,
         }
     }
 }

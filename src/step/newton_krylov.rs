@@ -391,9 +391,6 @@ struct Linearization<'s> {
     /// Whether the last solve reached the Krylov tolerance rtol (not only the forcing term).
     tight: bool,
     nodes: Vec<Linearized>,
-    /// The bulk layers the predicted bounds' sweeps condense through (`solver.condensed_layers`;
-    /// 0: Γ_C's own rows of A).
-    condensed_layers: usize,
 }
 
 impl Linearization<'_> {
@@ -428,7 +425,7 @@ impl Linearization<'_> {
         let mut slip = w.to_vec();
         let n = self.system.nodes.len();
         let order = (0..n).chain((0..n).rev());
-        if self.condensed_layers == 0 {
+        let Some(condensed) = self.system.condensed_rows(self.a)? else {
             for _ in 0..sweeps {
                 for i in order.clone() {
                     let rows = self.node_rows(i, x, &contact);
@@ -436,10 +433,9 @@ impl Linearization<'_> {
                 }
             }
             return Ok(slip);
-        }
+        };
         // Through the body: Γ_C's residual r = b − A x at the iterate, where the other rows
         // hold, changes by −S Δ when Γ_C's velocities change by Δ.
-        let condensed = self.system.condensed_rows(self.a, self.condensed_layers)?;
         let residual: Vec<f64> = (first..self.b.len())
             .map(|row| self.b[row] - self.base_row_times(row, x))
             .collect();
@@ -702,8 +698,6 @@ pub struct NewtonKrylov<'a> {
     /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the
     /// first (`solver.contact_sweeps`; 0: the paper's loop).
     contact_sweeps: usize,
-    /// The bulk layers those sweeps condense through (`solver.condensed_layers`; 0: none).
-    condensed_layers: usize,
     /// The last step's solution, the Newton iterations' start where the same step is solved
     /// again with other data (the fixed points on the contact pressure and on a nonlinear heat
     /// exchange, [`super::StepSolver`]).
@@ -729,14 +723,14 @@ impl<'a> NewtonKrylov<'a> {
     /// The solver of `problem` on `system`, stopping at `tolerance` (ε_conv) within
     /// `max_iterations` Newton iterations per step, its loop's tail accelerated by Anderson's
     /// method of `anderson_depth` (0: not), its iterates' bounds predicted by `contact_sweeps`
-    /// nonlinear Gauss–Seidel sweeps over Γ_C (0: not) with the step matrix condensed onto Γ_C
-    /// through `condensed_layers` layers of the body (0: Γ_C's own rows).
+    /// nonlinear Gauss–Seidel sweeps over Γ_C (0: not), with the step matrix condensed onto Γ_C
+    /// where the system's settings ask for it (`solver.condensed_layers`).
     pub fn new(
         problem: &'a Problem,
         system: KrylovSystem,
         tolerance: f64,
         max_iterations: usize,
-        (anderson_depth, contact_sweeps, condensed_layers): (usize, usize, usize),
+        (anderson_depth, contact_sweeps): (usize, usize),
     ) -> Self {
         NewtonKrylov {
             problem,
@@ -745,7 +739,6 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations,
             anderson_depth,
             contact_sweeps,
-            condensed_layers,
             last: std::sync::Mutex::new(None),
         }
     }
@@ -828,7 +821,6 @@ impl<'a> NewtonKrylov<'a> {
                 residual: Vec::new(),
                 tight: false,
                 nodes: Vec::with_capacity(sys.nodes.len()),
-                condensed_layers: self.condensed_layers,
             },
             inner_converged: false,
             anderson: TailAnderson::new(self.anderson_depth),

@@ -89,7 +89,7 @@ impl<'a> StepSolver<'a> {
                         system,
                         params.tolerance,
                         params.max_convexification,
-                        (params.anderson_depth, params.contact_sweeps, params.condensed_layers),
+                        (params.anderson_depth, params.contact_sweeps),
                     )),
                 })
             }
