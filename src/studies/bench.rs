@@ -172,6 +172,7 @@ pub fn hard_cases() -> Vec<HardCase> {
     let long = ["time.final_time=3.0", "time.steps=192"];
     let steep = ["friction.alpha=1000.0", "friction.b=0.05"];
     let cells = ["mesh.nx=56", "mesh.ny=14", "mesh.nz=14", "time.steps=8"];
+    let iterative = [&cells[..], &["solver.linear=iterative"]].concat();
     vec![
         case(
             "long-fast",
@@ -209,40 +210,25 @@ pub fn hard_cases() -> Vec<HardCase> {
             "3d-56x14x14",
             "3D example on 56 × 14 × 14 cells (47k unknowns), k = 1/8, direct path",
             Some("scenarios/paper3d.toml"),
-            &[cells[0], cells[1], cells[2], cells[3], "solver.linear=direct"],
+            &[&cells[..], &["solver.linear=direct"]].concat(),
         ),
         case(
             "3d-iterative",
             "the same on the iterative path (Newton–Krylov; where the loop fails, the loop with predicted bounds, then Newton on the law)",
             Some("scenarios/paper3d.toml"),
-            &[cells[0], cells[1], cells[2], cells[3], "solver.linear=iterative"],
+            &iterative,
         ),
         case(
             "3d-predicted",
             "the same with the loop's bounds predicted by a symmetric sweep over Γ_C (solver.contact_sweeps = 1)",
             Some("scenarios/paper3d.toml"),
-            &[
-                cells[0],
-                cells[1],
-                cells[2],
-                cells[3],
-                "solver.linear=iterative",
-                "solver.contact_sweeps=1",
-            ],
+            &[&iterative[..], &["solver.contact_sweeps=1"]].concat(),
         ),
         case(
             "3d-condensed",
             "the same with 8 sweeps through two layers of the body (solver.contact_sweeps = 8, solver.condensed_layers = 2)",
             Some("scenarios/paper3d.toml"),
-            &[
-                cells[0],
-                cells[1],
-                cells[2],
-                cells[3],
-                "solver.linear=iterative",
-                "solver.contact_sweeps=8",
-                "solver.condensed_layers=2",
-            ],
+            &[&iterative[..], &["solver.contact_sweeps=8", "solver.condensed_layers=2"]].concat(),
         ),
     ]
 }
