@@ -607,6 +607,8 @@ impl ProblemBuilder {
         let (k_e, theta_r) = self.exchange.robin().unwrap_or((0.0, 0.0));
         #[cfg(feature = "mpi")]
         let partition = std::sync::OnceLock::new();
+        // A share's rows beside its own: Γ_C's and the layers around them it is asked for.
+        let share_rows = || super::nodes_within(&mesh, mesh.nodes_on(&parts.contact), self.contact_layers);
         let columns = match self.share {
             None => None,
             Some(ShareOf::Nodes(owned)) => {
@@ -616,8 +618,7 @@ impl ProblemBuilder {
                         nodes: mesh.n_nodes(),
                     });
                 }
-                let rows = super::nodes_within(&mesh, mesh.nodes_on(&parts.contact), self.contact_layers);
-                Some(ColumnShare::new(&mesh, owned, &rows))
+                Some(ColumnShare::new(&mesh, owned, &share_rows()))
             }
             #[cfg(feature = "mpi")]
             Some(ShareOf::Rank(comm)) => {
@@ -626,8 +627,7 @@ impl ProblemBuilder {
                     detail: e.to_string(),
                 })?;
                 let owned = split.node_owner.iter().map(|&r| r == comm.rank()).collect();
-                let rows = super::nodes_within(&mesh, mesh.nodes_on(&parts.contact), self.contact_layers);
-                let share = ColumnShare::new(&mesh, owned, &rows);
+                let share = ColumnShare::new(&mesh, owned, &share_rows());
                 let _ = partition.set(split);
                 Some(share.over_ranks(comm))
             }

@@ -41,39 +41,23 @@
 //!
 //! Depends on: [`crate::la`] (the error type).
 
-use crate::la::{FactorStage, LaError};
+use crate::la::{CsrMatrix, FactorStage, LaError};
 
 /// Symmetric Gauss–Seidel sweeps that stand for A_RR⁻¹ in the probes (module header): 1 gave 166
 /// Newton iterations at 47k unknowns and k = 1/8 (8 steps, 8 sweeps over Γ_C), 3 gave 103, 10
 /// gave 115 (the sparse LU's solution path, another of the steps' solutions from step 2 on).
 const LAYER_SWEEPS: usize = 3;
 
-/// S_L on A's Γ_C pattern: rows and columns are Γ_C's tangential unknowns, numbered from the
-/// system's first Γ_C row (`first_contact`).
-#[derive(Debug, Clone)]
-pub(super) struct CondensedRows {
-    ptr: Vec<usize>,
-    cols: Vec<u32>,
-    values: Vec<f64>,
-}
-
-impl CondensedRows {
-    /// Row i's columns and values (Γ_C's numbering).
-    pub(super) fn row(&self, i: usize) -> (&[u32], &[f64]) {
-        let range = self.ptr[i]..self.ptr[i + 1];
-        (&self.cols[range.clone()], &self.values[range])
-    }
-}
-
 /// S_L (module header) of the system whose row r is `row(r)` (columns and values of A, the
 /// system's order, `n` unknowns, Γ_C's tangential unknowns from `first` on), through the bulk
-/// unknowns within `layers` hops of Γ_C (0: A_TT itself).
+/// unknowns within `layers` hops of Γ_C (0: A_TT itself): rows and columns are Γ_C's tangential
+/// unknowns, numbered from `first`.
 pub(super) fn condense<'r>(
     row: impl Fn(usize) -> (&'r [u32], &'r [f64]),
     n: usize,
     first: usize,
     layers: usize,
-) -> Result<CondensedRows, LaError> {
+) -> Result<CsrMatrix, LaError> {
     let nt = n - first;
     let layer = bulk_layers(&row, n, first, layers);
     let mut local = vec![usize::MAX; first];
@@ -95,7 +79,7 @@ pub(super) fn condense<'r>(
     // A_RR by rows (the layer's numbering), and A_RT times each colour's indicator vector:
     // the probes, row-major (row l's colours side by side).
     let nr = layer.len();
-    let (mut rr_ptr, mut rr_cols, mut rr_values) = (vec![0], Vec::new(), Vec::new());
+    let (mut rr_ptr, mut rr_cols, mut rr_values) = (vec![0], Vec::<u32>::new(), Vec::new());
     let mut rhs = vec![0.0; nr * colours];
     for (l, &r) in layer.iter().enumerate() {
         let (row_cols, row_values) = row(r);
@@ -104,13 +88,14 @@ pub(super) fn condense<'r>(
             if c >= first {
                 rhs[l * colours + colour[c - first]] += v;
             } else if local[c] != usize::MAX {
-                rr_cols.push(local[c]);
+                rr_cols.push(local[c] as u32);
                 rr_values.push(v);
             }
         }
         rr_ptr.push(rr_cols.len());
     }
-    let probes = gauss_seidel((&rr_ptr, &rr_cols, &rr_values), &rhs, colours)?;
+    let a_rr = CsrMatrix::from_rows(nr, rr_ptr, rr_cols, rr_values);
+    let probes = gauss_seidel(&a_rr, &rhs, colours)?;
 
     // Row i of S_L times colour c's indicator: A_TT's part at that colour minus A_TR y_c.
     let (mut ptr, mut cols, mut values) = (Vec::with_capacity(nt + 1), Vec::new(), Vec::new());
@@ -134,22 +119,17 @@ pub(super) fn condense<'r>(
         }
         ptr.push(cols.len());
     }
-    Ok(CondensedRows { ptr, cols, values })
+    Ok(CsrMatrix::from_rows(nt, ptr, cols, values))
 }
 
 /// Symmetric Gauss–Seidel sweeps on A_RR y = rhs for the probes' columns at once
-/// ([`LAYER_SWEEPS`] from y = 0): rows (ptr, cols, values), `width` columns side by side.
-fn gauss_seidel(
-    (ptr, cols, values): (&[usize], &[usize], &[f64]),
-    rhs: &[f64],
-    width: usize,
-) -> Result<Vec<f64>, LaError> {
-    let n = ptr.len() - 1;
+/// ([`LAYER_SWEEPS`] from y = 0), `width` columns side by side.
+fn gauss_seidel(a_rr: &CsrMatrix, rhs: &[f64], width: usize) -> Result<Vec<f64>, LaError> {
+    let n = a_rr.n();
     let mut y = vec![0.0; n * width];
     let mut sum = vec![0.0; width];
-    let mut diagonal = vec![0.0; n];
-    for (l, d) in diagonal.iter_mut().enumerate() {
-        *d = (ptr[l]..ptr[l + 1]).find(|&k| cols[k] == l).map_or(0.0, |k| values[k]);
+    let diagonal: Vec<f64> = (0..n).map(|l| a_rr.diagonal(l)).collect();
+    for (l, d) in diagonal.iter().enumerate() {
         if !(d.is_finite() && *d != 0.0) {
             return Err(LaError::Factorization {
                 stage: FactorStage::CondensedLayers,
@@ -160,11 +140,12 @@ fn gauss_seidel(
     for _ in 0..LAYER_SWEEPS {
         for l in (0..n).chain((0..n).rev()) {
             sum.copy_from_slice(&rhs[l * width..(l + 1) * width]);
-            for k in ptr[l]..ptr[l + 1] {
-                let c = cols[k];
+            let (cols, values) = a_rr.row(l);
+            for (&c, &value) in cols.iter().zip(values) {
+                let c = c as usize;
                 if c != l {
                     let yc = &y[c * width..(c + 1) * width];
-                    sum.iter_mut().zip(yc).for_each(|(s, y)| *s -= values[k] * y);
+                    sum.iter_mut().zip(yc).for_each(|(s, y)| *s -= value * y);
                 }
             }
             let d = diagonal[l];

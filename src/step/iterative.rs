@@ -29,7 +29,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use super::amg::VelocityAmg;
-use super::contact_condensation::{condense, CondensedRows};
+use super::contact_condensation::condense;
 use super::direct::{contact_tangential_unknowns, SystemStats};
 use super::{Criterion, KrylovParams, PreconditionerKind, SolveError, StepError, StepFailure};
 use crate::la::{gmres, level_bisection, CsrMatrix, FactorStage, Gmres, Ilu0, LaError, NodeGraph, Part, SolveInfo};
@@ -78,7 +78,7 @@ pub struct KrylovSystem {
     condensed_layers: usize,
     /// The step matrix condensed onto Γ_C through them: in one process computed at the first
     /// sweep, on the ranks at set-up (from the layers' rows, assembled there for it alone).
-    condensed: Mutex<Option<Arc<CondensedRows>>>,
+    condensed: Mutex<Option<Arc<CsrMatrix>>>,
 }
 
 /// What solves Ã x = b̃ by GMRES: this process, with the ILU(0) of Ã (and the AMG's coarse
@@ -199,7 +199,7 @@ fn ranks_system(
     k: f64,
     (order, position, first_contact): (&[usize], &[usize], usize),
     params: &KrylovParams,
-) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CondensedRows>), StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CsrMatrix>), StepError> {
     use super::ranks::{RankKrylov, RankRows};
     use crate::la::mpi::{DistributedKrylov, DistributedPreconditioner};
     let krylov = |preconditioner, rtol, max_iterations| DistributedKrylov {
@@ -296,7 +296,7 @@ fn ranks_system(
     _k: f64,
     _system: (&[usize], &[usize], usize),
     _params: &KrylovParams,
-) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CondensedRows>), StepError> {
+) -> Result<(CsrMatrix, StepRhs, KrylovSolver, Option<CsrMatrix>), StepError> {
     Err(LaError::Petsc {
         operation: "MPI_Init",
         detail: "this build has no MPI: build thermocontact with `--features mpi` for a distributed run".into(),
@@ -381,7 +381,7 @@ impl KrylovSystem {
     /// layers of the body next to Γ_C ([`super::contact_condensation`]), once per step size;
     /// `None` where the setting is 0. In one process from `a` (Ã: its bulk rows are A's, its
     /// Γ_C rows A's in `base`) at the first call; on the ranks the set-up's.
-    pub(super) fn condensed_rows(&self, a: &CsrMatrix) -> Result<Option<Arc<CondensedRows>>, LaError> {
+    pub(super) fn condensed_rows(&self, a: &CsrMatrix) -> Result<Option<Arc<CsrMatrix>>, LaError> {
         if self.condensed_layers == 0 {
             return Ok(None);
         }

@@ -308,7 +308,6 @@
 use std::time::Instant;
 
 use super::anderson::TailAnderson;
-use super::contact_condensation::CondensedRows;
 use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::newton::{node_law_residual, slip_linearization};
@@ -485,13 +484,13 @@ impl Linearization<'_> {
         at
     }
 
-    /// Node i's rows of the condensed step matrix S ([`CondensedRows`]) at the sweep's state:
+    /// Node i's rows of the condensed step matrix S ([`super::contact_condensation`]) at the sweep's state:
     /// s = r − S (contact − start) without the node's own block, r Γ_C's residual at the
     /// iterate (whose Γ_C velocities are `start`).
     fn condensed_node_rows(
         &self,
         i: usize,
-        (condensed, residual): (&CondensedRows, &[f64]),
+        (condensed, residual): (&CsrMatrix, &[f64]),
         start: &[f64],
         contact: &[f64],
     ) -> NodeRowsAt {
