@@ -1096,6 +1096,13 @@ fn print_summary(s: &Summary) {
             format!("{} ({})", s.predicted_iterates, s.convexification_iterations)
         );
     }
+    if s.backtracked_newton_iterations > 0 {
+        println!(
+            "{:<34} {:>12}",
+            "Newton steps cut back (of all)",
+            format!("{} ({})", s.backtracked_newton_iterations, s.newton_iterations)
+        );
+    }
     if s.exchange_iterations > 0 {
         println!(
             "{:<34} {:>12}",

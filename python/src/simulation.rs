@@ -261,6 +261,9 @@ pub struct PyStepInfo {
     /// Convexification iterates of the iterative path whose bounds the Gauss–Seidel sweeps
     /// over Γ_C predicted (`solver.contact_sweeps`).
     predicted_iterates: usize,
+    /// Newton iterations of the iterative path's convex problems cut back along their step,
+    /// where the full step raised the friction law's residual.
+    backtracked_newton_iterations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -284,6 +287,7 @@ impl From<StepInfo> for PyStepInfo {
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             anderson_combinations: info.anderson_combinations,
             predicted_iterates: info.predicted_iterates,
+            backtracked_newton_iterations: info.backtracked_newton_iterations,
             substeps: info.substeps,
             cutback_depth: info.cutback_depth,
             krylov_iterations: info.krylov_iterations,
@@ -312,6 +316,7 @@ impl PyStepInfo {
         d.set_item("nonmonotone_newton_iterations", self.nonmonotone_newton_iterations)?;
         d.set_item("anderson_combinations", self.anderson_combinations)?;
         d.set_item("predicted_iterates", self.predicted_iterates)?;
+        d.set_item("backtracked_newton_iterations", self.backtracked_newton_iterations)?;
         d.set_item("substeps", self.substeps)?;
         d.set_item("cutback_depth", self.cutback_depth)?;
         d.set_item("krylov_iterations", self.krylov_iterations)?;
@@ -323,7 +328,7 @@ impl PyStepInfo {
         format!(
             "StepInfo(convexification_iterations={}, inner_iterations={}, newton_iterations={}, fallback={}, \
              descent_sweeps={}, nonmonotone_newton_iterations={}, anderson_combinations={}, predicted_iterates={}, \
-             substeps={}, cutback_depth={}, krylov_iterations={})",
+             backtracked_newton_iterations={}, substeps={}, cutback_depth={}, krylov_iterations={})",
             self.convexification_iterations,
             self.inner_iterations,
             self.newton_iterations,
@@ -332,6 +337,7 @@ impl PyStepInfo {
             self.nonmonotone_newton_iterations,
             self.anderson_combinations,
             self.predicted_iterates,
+            self.backtracked_newton_iterations,
             self.substeps,
             self.cutback_depth,
             self.krylov_iterations

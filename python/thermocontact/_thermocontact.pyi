@@ -106,6 +106,7 @@ class StepInfo:
     nonmonotone_newton_iterations: int
     anderson_combinations: int
     predicted_iterates: int
+    backtracked_newton_iterations: int
     substeps: int
     cutback_depth: int
     krylov_iterations: int

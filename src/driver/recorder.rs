@@ -137,6 +137,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             anderson_combinations: info.anderson_combinations,
             predicted_iterates: info.predicted_iterates,
+            backtracked_newton_iterations: info.backtracked_newton_iterations,
             heat_residual: info.energy.relative_heat_residual(),
         };
         self.tally.add_step(info, step);
@@ -309,6 +310,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             nonmonotone_newton_iterations: tally.nonmonotone_newton_iterations,
             anderson_combinations: tally.anderson_combinations,
             predicted_iterates: tally.predicted_iterates,
+            backtracked_newton_iterations: tally.backtracked_newton_iterations,
             krylov_iterations: tally.krylov_iterations,
             linear: report.linear.name().to_string(),
             preconditioner: report.preconditioner.map(|p| p.name().to_string()),

@@ -126,6 +126,10 @@ pub struct Summary {
     /// Γ_C predicted (`solver.contact_sweeps`), over all steps.
     #[serde(default)]
     pub predicted_iterates: usize,
+    /// Newton iterations of the iterative path's convex problems cut back along their step
+    /// (the full step raised the law's residual), over all steps.
+    #[serde(default)]
+    pub backtracked_newton_iterations: usize,
     /// Sparse solves in the time loop: full solves and their equivalents, two sweeps over all of
     /// the factor counting one (rounded up; sweeps over the contact block alone are not counted).
     /// Over the whole run: a continued run adds its own to those of the parts before (their
@@ -437,6 +441,10 @@ pub struct StepRecord {
     /// ([`StepInfo::predicted_iterates`]).
     #[serde(default)]
     pub predicted_iterates: usize,
+    /// Newton iterations cut back along their step
+    /// ([`StepInfo::backtracked_newton_iterations`]).
+    #[serde(default)]
+    pub backtracked_newton_iterations: usize,
 }
 
 /// Increments not measured (and those of checkpoints written before steps.csv had them).
@@ -458,7 +466,7 @@ impl StepRecord {
     /// residuals relative to their balance's largest term (docs/energy.md); last, the iterations
     /// of the iterative path's way out where the convexification loop failed and the iterates
     /// its loop started from an Anderson combination.
-    pub const HEADER: [&'static str; 38] = [
+    pub const HEADER: [&'static str; 39] = [
         "n",
         "t",
         "convexification",
@@ -497,6 +505,7 @@ impl StepRecord {
         "nonmonotone_newton",
         "anderson",
         "predicted",
+        "backtracked",
     ];
 
     /// The record as a `steps.csv` row.
@@ -542,6 +551,7 @@ impl StepRecord {
             self.nonmonotone_newton_iterations as f64,
             self.anderson_combinations as f64,
             self.predicted_iterates as f64,
+            self.backtracked_newton_iterations as f64,
         ]);
         row
     }
@@ -568,6 +578,8 @@ pub struct Tally {
     pub anderson_combinations: usize,
     #[serde(default)]
     pub predicted_iterates: usize,
+    #[serde(default)]
+    pub backtracked_newton_iterations: usize,
     #[serde(default)]
     pub krylov_iterations: usize,
     /// Iterates of the fixed point on a nonlinear heat exchange, over all steps.
@@ -617,6 +629,7 @@ impl Tally {
         self.nonmonotone_newton_iterations += info.nonmonotone_newton_iterations;
         self.anderson_combinations += info.anderson_combinations;
         self.predicted_iterates += info.predicted_iterates;
+        self.backtracked_newton_iterations += info.backtracked_newton_iterations;
         self.exchange_iterations += info.exchange_iterations;
         self.pressure_iterations += info.pressure_iterations;
         self.max_law_residual = self.max_law_residual.max(record.law_residual);

@@ -647,6 +647,7 @@ pub struct SolverSpec {
     pub anderson_depth: usize,
     pub contact_sweeps: usize,
     pub condensed_layers: usize,
+    pub backtracking: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

@@ -242,6 +242,7 @@ impl<'a> FastSolver<'a> {
                     value: stall.law_residual,
                     tolerance: self.paper_params.tolerance,
                     residual_history: Vec::new(),
+                    cycle: None,
                 }))
             }
         }
@@ -341,6 +342,7 @@ impl ConvexSubproblem for CondensedConvex<'_, '_> {
                 value: step.law_residual(&iterate.w, &iterate.xi, None) / g_min.max(f64::MIN_POSITIVE),
                 tolerance,
                 residual_history: Vec::new(),
+                cycle: None,
             }));
         };
         let dw = max_diff(&inner.w, &iterate.w);

@@ -605,6 +605,7 @@ pub(super) fn krylov_solve(
             value: residual,
             tolerance: rtol,
             residual_history: history,
+            cycle: None,
         })),
         Err(other) => Err(other.into()),
     }

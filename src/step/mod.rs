@@ -461,6 +461,9 @@ pub struct SolverParams {
     /// iterative path's convexification loop after its first (0: the paper's loop; another
     /// rule where a step has several solutions: docs/solvers.md).
     pub contact_sweeps: usize,
+    /// Cut back a Newton step of the iterative path's convex problems that raises the law's
+    /// residual (`newton_krylov`; false: every full step, as before 2026-11-29's fourth session).
+    pub backtracking: bool,
 }
 
 impl SolverParams {
@@ -488,6 +491,7 @@ impl Default for SolverParams {
             krylov: KrylovParams::default(),
             anderson_depth: 2,
             contact_sweeps: 0,
+            backtracking: true,
         }
     }
 }
@@ -520,6 +524,9 @@ pub struct StepInfo {
     /// Γ_C predicted (`solver.contact_sweeps`, or the way out of a failed paper's loop, whose
     /// step's `convexification_iterations` then count both loops').
     pub predicted_iterates: usize,
+    /// Newton iterations of the iterative path's convex problems whose step was cut back
+    /// because the full step raised the law's residual (`newton_krylov`'s backtracking).
+    pub backtracked_newton_iterations: usize,
     /// Substeps the step took: 1 without cutback, 2^depth at the deepest cutback.
     pub substeps: usize,
     /// The deepest cutback of the step (0: none): its shortest substep was k/2^depth.
@@ -546,6 +553,7 @@ impl StepInfo {
         self.nonmonotone_newton_iterations += other.nonmonotone_newton_iterations;
         self.anderson_combinations += other.anderson_combinations;
         self.predicted_iterates += other.predicted_iterates;
+        self.backtracked_newton_iterations += other.backtracked_newton_iterations;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);
         self.krylov_iterations += other.krylov_iterations;
@@ -618,6 +626,11 @@ pub struct StepFailure {
     /// one, as GMRES estimates them (empty for the other loops; not in JSON then).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub residual_history: Vec<f64>,
+    /// The period of the cycle the loop was found in, where it was given up on one
+    /// ([`convexification`]'s cycle rule, periods up to 8) rather than at its cap (a byte: the
+    /// failure travels inside every run's error type, which clippy keeps small).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cycle: Option<u8>,
 }
 
 /// A finite number as a JSON number, ±∞ and NaN (which JSON lacks) as the strings "inf",
@@ -641,7 +654,11 @@ impl std::fmt::Display for StepFailure {
             self.criterion.describe(),
             self.value,
             self.tolerance
-        )
+        )?;
+        match self.cycle {
+            Some(period) => write!(f, ", cycling with period {period}"),
+            None => Ok(()),
+        }
     }
 }
 

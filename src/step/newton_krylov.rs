@@ -128,6 +128,34 @@
 //! the split settles in a slow tail (972k, k = 1/8): 45 → 37–39 Newton iterations in the first
 //! step, the same slip count, but near a fixed point the loop repels it would converge there.
 //!
+//! **A Newton step that raises the law's residual is cut back (`solver.backtracking`, on by
+//! default).** Semismooth Newton on the Alart–Curnier function is not globally convergent, and
+//! at a coarse k it can go round a cycle inside a convex problem: traced on a thin slab (104 ×
+//! 6 × 6 cells of the 3D example, k = 1/8, 8 sweeps through two layers), a few nodes at the full
+//! bound μ(0)S had w_τ = +0.08, −0.17, +0.10, −0.17 m/s at successive Newton iterations with ξ
+//! along w (the law's residual 2g, twice the bound) and one node flipping between stick and
+//! slip, so every other convex problem ran through its [`MAX_NEWTON_PER_CONVEX_PROBLEM`]
+//! iterations unsolved and the loop went round a cycle of those unsolved iterates. From a
+//! convex problem's second Newton iteration on, a step that raises the law's residual (the
+//! largest nodal one, for the frozen bounds) is cut back to the first of ½, ¼, ⅛ of itself that
+//! lowers it ([`SemismoothNewton::backtrack`]; the full step where none does). Both ends of the
+//! step solve the step's linear equations, each with the ξ its rows leave over, so every point
+//! between does too (the frictional heat aside, taken at w as at every iterate): the point is
+//! an iterate of the same convex problem, whose solution is unique, so only the path to it
+//! changes. Where no Newton step raises the residual (every case measured at k = 1/64, and the
+//! 2D and 3D examples, the pad and `own_laws3d.toml` on the iterative path) the outputs are the
+//! bytes of the build before. Measured at k = 1/8 (16 steps; `steps.csv`'s `backtracked` counts
+//! the cut-back iterations; the same build with `backtracking = false` before): the thin slab
+//! above 110.9 → 11.5 s, Newton iterations 1 489 → 1 180, Krylov iterations 110 246 → 4 314 (a
+//! convex problem that flips its nodes stiffens Ã: 74 Krylov iterations per solve, 3.7 after),
+//! four steps cut back (to k/8) → one (to k/2); with the paper's loop there 31.0 → 12.9 s, the
+//! same iterates in every step and the same solution (fields within 5·10⁻¹⁰), Krylov iterations
+//! 35 773 → 13 891; on 52 × 3 × 3 cells two steps cut back → none; the paper's loop on 80 × 4
+//! × 4 cells 1 343 → 1 326 Newton iterations and 64 × 16 × 16 with 8 sweeps through two layers
+//! (8 steps) 134 → 125, the same solutions. Not tried: a line search on a merit function of
+//! the whole convex problem (its energy, for frozen θ), a descent where the residual's largest
+//! nodal value need not be.
+//!
 //! **Inexact Newton solves (`solver.krylov_forcing`, default 0.01).** Each Newton iteration's
 //! Krylov solve starts from the last iterate with its residual carried (only Γ_C's rows and the
 //! contact nodes' temperature rows changed), and that residual is the nonlinear residual of the
@@ -345,6 +373,10 @@ const CONVERGING_INCREMENT: f64 = 1.5;
 /// Newton iterations per convex problem before its convexification iterate moves on anyway
 /// (the next iterate starts from where this one stopped).
 const MAX_NEWTON_PER_CONVEX_PROBLEM: usize = 20;
+
+/// The step lengths a convex problem's Newton iteration is cut back to, in turn, where the full
+/// step raised the law's residual ([`SemismoothNewton::backtrack`]).
+const BACKTRACKING: [f64; 3] = [0.5, 0.25, 0.125];
 
 /// The way out where the loop fails: Newton iterations on the nonmonotone law before the step
 /// is given up (and cut back). Where it converged on the 3D example at k = 1/8 it took 15.
@@ -697,6 +729,9 @@ pub struct NewtonKrylov<'a> {
     /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the
     /// first (`solver.contact_sweeps`; 0: the paper's loop).
     contact_sweeps: usize,
+    /// Whether a convex problem's Newton step that raises the law's residual is cut back
+    /// ([`SemismoothNewton::backtrack`], `solver.backtracking`).
+    backtracking: bool,
     /// The last step's solution, the Newton iterations' start where the same step is solved
     /// again with other data (the fixed points on the contact pressure and on a nonlinear heat
     /// exchange, [`super::StepSolver`]).
@@ -723,13 +758,14 @@ impl<'a> NewtonKrylov<'a> {
     /// `max_iterations` Newton iterations per step, its loop's tail accelerated by Anderson's
     /// method of `anderson_depth` (0: not), its iterates' bounds predicted by `contact_sweeps`
     /// nonlinear Gauss–Seidel sweeps over Γ_C (0: not), with the step matrix condensed onto Γ_C
-    /// where the system's settings ask for it (`solver.condensed_layers`).
+    /// where the system's settings ask for it (`solver.condensed_layers`), its convex problems'
+    /// Newton steps cut back where they raise the law's residual with `backtracking`.
     pub fn new(
         problem: &'a Problem,
         system: KrylovSystem,
         tolerance: f64,
         max_iterations: usize,
-        (anderson_depth, contact_sweeps): (usize, usize),
+        (anderson_depth, contact_sweeps, backtracking): (usize, usize, bool),
     ) -> Self {
         NewtonKrylov {
             problem,
@@ -738,6 +774,7 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations,
             anderson_depth,
             contact_sweeps,
+            backtracking,
             last: std::sync::Mutex::new(None),
         }
     }
@@ -933,6 +970,7 @@ impl<'a> NewtonKrylov<'a> {
 
 /// An iterate of the Newton–Krylov loop: all unknowns (in the system's order), and w_τ, ξ on
 /// Γ_C.
+#[derive(Clone)]
 struct AllUnknowns {
     x: Vec<f64>,
     w: Vec<f64>,
@@ -988,6 +1026,42 @@ impl SemismoothNewton<'_, '_> {
             Err(SolveError::NotConverged(_)) => Ok(None),
             Err(other) => Err(other),
         }
+    }
+
+    /// Backtracking along a Newton step of a convex problem that raised its law's residual
+    /// (`start_law` at `start`, more at `iterate`): the first point start + τ (iterate − start),
+    /// τ in [`BACKTRACKING`], whose residual is below `start_law` becomes the iterate, and its
+    /// residual is returned; `None` (the full step kept) where none is. Both ends satisfy the
+    /// step's linear equations (each Newton iterate's ξ is what its rows leave over), so every
+    /// point between does too, but for the frictional heat taken at w: the point is the
+    /// convex problem's iterate as any Newton iterate is, and its solution is the same. The
+    /// Krylov residual carried between solves is for the full step's x: dropped, so the next
+    /// solve computes it afresh, and solved to rtol before the loop may stop on the point.
+    fn backtrack(
+        &mut self,
+        (start_law, start): (f64, AllUnknowns),
+        iterate: &mut AllUnknowns,
+        frozen: &[f64],
+        info: &mut StepInfo,
+    ) -> Option<f64> {
+        let solver = self.solver;
+        let along = |tau: f64, from: &[f64], to: &[f64]| -> Vec<f64> {
+            from.iter().zip(to).map(|(a, b)| a + tau * (b - a)).collect()
+        };
+        let (tau, law, w, xi) = BACKTRACKING.iter().find_map(|&tau| {
+            let (w, xi) = (along(tau, &start.w, &iterate.w), along(tau, &start.xi, &iterate.xi));
+            let law = solver.law_residual(&w, &xi, frozen);
+            (law < start_law).then_some((tau, law, w, xi))
+        })?;
+        *iterate = AllUnknowns {
+            x: along(tau, &start.x, &iterate.x),
+            w,
+            xi,
+        };
+        self.linearization.residual.clear();
+        self.linearization.tight = false;
+        info.backtracked_newton_iterations += 1;
+        Some(law)
     }
 
     /// Whether the predicted iterates have stalled, their criteria `checks` the last: they
@@ -1142,15 +1216,26 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         let (w_outer, xi_outer) = (iterate.w.clone(), iterate.xi.clone());
         self.inner_converged = false;
         let forcing = solver.system.forcing;
+        // The law's residual at the last Newton iterate of this convex problem (none before
+        // its first), and that iterate, kept to backtrack to.
+        let mut last_law = None;
         for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
-            let AllUnknowns { x, w, xi } = iterate;
+            let start = (last_law.filter(|_| solver.backtracking)).map(|law| (law, iterate.clone()));
+            let AllUnknowns { x, w, xi } = &mut *iterate;
             (*w, *xi) = self
                 .linearization
                 .newton_iteration(x, w, xi, &frozen, (Fall::Frozen, forcing), info)?;
             // The linear equations hold at the new iterate (up to the Krylov solve's tolerance
             // and the lagged heat), so the convex problem is solved where its law holds: no
             // second solve to see the update vanish.
-            if solver.law_residual(w, xi, &frozen) <= inner_tolerance * g_scale {
+            let mut law = solver.law_residual(&iterate.w, &iterate.xi, &frozen);
+            if let Some((start_law, start)) = start.filter(|&(start_law, _)| law > start_law) {
+                law = self
+                    .backtrack((start_law, start), iterate, &frozen, info)
+                    .unwrap_or(law);
+            }
+            last_law = Some(law);
+            if law <= inner_tolerance * g_scale {
                 self.inner_converged = true;
                 break;
             }
@@ -1184,6 +1269,11 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
     /// A converged loop needs its last convex problem solved too.
     fn accept(&mut self, _iterate: &mut AllUnknowns) -> bool {
         self.inner_converged
+    }
+
+    fn slipping(&self) -> Option<usize> {
+        let slipping = |node: &&Linearized| matches!(node, Linearized::Slip(..));
+        Some(self.linearization.nodes.iter().filter(slipping).count())
     }
 }
 

@@ -281,6 +281,7 @@ impl<S: LoadedStep> ConvexSubproblem for Uzawa<'_, S> {
                 value: change / g_max,
                 tolerance: inner_tolerance,
                 residual_history: Vec::new(),
+                cycle: None,
             }));
         }
         // The full fields of this iterate with the converged contact terms.

@@ -89,7 +89,7 @@ impl<'a> StepSolver<'a> {
                         system,
                         params.tolerance,
                         params.max_convexification,
-                        (params.anderson_depth, params.contact_sweeps),
+                        (params.anderson_depth, params.contact_sweeps, params.backtracking),
                     )),
                 })
             }
@@ -189,6 +189,7 @@ impl<'a> StepSolver<'a> {
             value: change,
             tolerance,
             residual_history: Vec::new(),
+            cycle: None,
         }))
     }
 
@@ -240,6 +241,7 @@ impl<'a> StepSolver<'a> {
             value: change,
             tolerance,
             residual_history: Vec::new(),
+            cycle: None,
         }))
     }
 
