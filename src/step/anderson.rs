@@ -230,13 +230,23 @@ fn combination(history: &[(Vec<f64>, Vec<f64>)]) -> Vec<f64> {
 mod tests {
     use super::*;
 
-    /// T(g) = A g + c with A symmetric, eigenvalues 0.3 and 0.25, fixed point g* = (1, 2, 3).
-    fn linear_map(g: &[f64]) -> Vec<f64> {
-        let a = [[0.3, 0.0, 0.0], [0.0, 0.275, 0.025], [0.0, 0.025, 0.275]];
+    /// T(g) = g* + A (g − g*), fixed point g* = (1, 2, 3).
+    fn affine_map(a: [[f64; 3]; 3], g: &[f64]) -> Vec<f64> {
         let star = [1.0, 2.0, 3.0];
         (0..3)
             .map(|i| star[i] + (0..3).map(|j| a[i][j] * (g[j] - star[j])).sum::<f64>())
             .collect()
+    }
+
+    /// [`affine_map`] with A symmetric, eigenvalues 0.3 and 0.25.
+    fn linear_map(g: &[f64]) -> Vec<f64> {
+        affine_map([[0.3, 0.0, 0.0], [0.0, 0.275, 0.025], [0.0, 0.025, 0.275]], g)
+    }
+
+    /// [`affine_map`] with eigenvalues 0.9, 0.89 and 0.87: a slow contraction, one factor
+    /// dominating (the thin slab's tail at k = 1/8 fell 1.105× per iterate).
+    fn slow_map(g: &[f64]) -> Vec<f64> {
+        affine_map([[0.9, 0.0, 0.0], [0.0, 0.88, 0.01], [0.0, 0.01, 0.88]], g)
     }
 
     fn error(g: &[f64]) -> f64 {
@@ -245,16 +255,6 @@ mod tests {
             .zip(g)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max)
-    }
-
-    /// T(g) = A g + c with eigenvalues 0.9, 0.89 and 0.87: a slow contraction, one factor
-    /// dominating (the thin slab's tail at k = 1/8 fell 1.105× per iterate).
-    fn slow_map(g: &[f64]) -> Vec<f64> {
-        let a = [[0.9, 0.0, 0.0], [0.0, 0.88, 0.01], [0.0, 0.01, 0.88]];
-        let star = [1.0, 2.0, 3.0];
-        (0..3)
-            .map(|i| star[i] + (0..3).map(|j| a[i][j] * (g[j] - star[j])).sum::<f64>())
-            .collect()
     }
 
     /// Iterates g ← T(g) (with `anderson`'s combinations where it gives them) until the error
