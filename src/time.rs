@@ -172,6 +172,7 @@ impl<'a> Levels<'a> {
                         failure,
                     });
                 }
+                crate::step::heartbeat::cut_back(previous.t, t, depth + 1, &failure);
                 let middle = previous.t + 0.5 * (t - previous.t);
                 let (half, mut info) = self.advance(previous, middle, depth + 1, n)?;
                 let (end, rest) = self.advance(&half, t, depth + 1, n)?;

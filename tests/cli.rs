@@ -541,3 +541,46 @@ fn a_step_a_way_out_finished_is_logged() {
     assert_eq!(stderr.matches("did not converge").count(), 1, "{stderr}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// A step that does not converge says why before it is cut back: the loop, its iterations, the
+/// criterion and by how much, and the substeps it is cut into; one line per failed (sub)step,
+/// then the step's own line. The 2D example on 16 × 4 cells with the convexification loop
+/// capped at 5 iterates and the descent off cuts four steps back.
+#[test]
+fn a_step_cut_back_says_why() {
+    let out = scratch("cut-back-why");
+    let output = bin()
+        .args(["run", "--out"])
+        .arg(&out)
+        .args(["--set", "mesh.nx=16", "--set", "mesh.ny=4", "--set", "time.steps=16"])
+        .args(["--set", "solver.max_sweeps=0", "--set", "solver.max_convexification=5"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let why: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("; cut back to substeps of k/"))
+        .collect();
+    for line in &why {
+        for part in [
+            "  step ",
+            ": from t = ",
+            "the fast solver's convexification loop stopped after 5 iterations: ",
+            " > tolerance 1e-6",
+        ] {
+            assert!(line.contains(part), "`{part}` missing in: {line}");
+        }
+    }
+    assert!(
+        why.iter().any(|l| l.ends_with("cut back to substeps of k/2")),
+        "{why:?}"
+    );
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let cut_steps = summary["cutbacks"].as_array().unwrap().len();
+    assert!(cut_steps > 0);
+    assert_eq!(stderr.matches(": cut back, ").count(), cut_steps, "{stderr}");
+    // Each cut-back step failed once at k, and each failed substep adds a line.
+    assert!(why.len() >= cut_steps, "{why:?}");
+    std::fs::remove_dir_all(&out).ok();
+}

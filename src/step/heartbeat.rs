@@ -143,6 +143,22 @@ pub(crate) fn outer(loop_name: &str, m: usize, checks: &[(Criterion, f64, f64)])
     });
 }
 
+/// The (sub)step from `from` to `to` did not converge (`failure`) and is cut back into two of
+/// depth `depth` (substeps of k/2^depth): a line at once, whatever the pace, so that a log says
+/// why a step was cut back (the loop, the criterion and by how much, a cycle's period).
+pub(crate) fn cut_back(from: f64, to: f64, depth: usize, failure: &super::StepFailure) {
+    HEARTBEAT.with(|current| {
+        let mut current = current.borrow_mut();
+        let Some(beat) = current.as_mut() else { return };
+        let text = format!(
+            "  {}: from t = {from} to {to}: {failure}; cut back to substeps of k/{}",
+            beat.label,
+            1usize << depth
+        );
+        (beat.sink)(&text);
+    });
+}
+
 /// The progress line of iteration `m` of `loop_name` in the step `label`, `seconds` into it.
 pub fn line(label: &str, loop_name: &str, m: usize, checks: &[(Criterion, f64, f64)], seconds: f64) -> String {
     let (criterion, value, tolerance) = super::worst_criterion(checks);
