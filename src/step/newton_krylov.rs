@@ -145,8 +145,9 @@
 //! changes. Where no Newton step raises the residual (every case measured at k = 1/64, and the
 //! 2D and 3D examples, the pad and `own_laws3d.toml` on the iterative path) the outputs are the
 //! bytes of the build before. Measured at k = 1/8 (16 steps; `steps.csv`'s `backtracked` counts
-//! the cut-back iterations; the same build with `backtracking = false` before): the thin slab
-//! above 110.9 → 11.5 s, Newton iterations 1 489 → 1 180, Krylov iterations 110 246 → 4 314 (a
+//! the cut-back iterations; before: the build without it and without the loop's cycle rule,
+//! [`super::convexification`], which alone took the slab to 51.9 s): the thin slab above
+//! 110.9 → 11.5 s, Newton iterations 1 489 → 1 180, Krylov iterations 110 246 → 4 314 (a
 //! convex problem that flips its nodes stiffens Ã: 74 Krylov iterations per solve, 3.7 after),
 //! four steps cut back (to k/8) → one (to k/2); with the paper's loop there 31.0 → 12.9 s, the
 //! same iterates in every step and the same solution (fields within 5·10⁻¹⁰), Krylov iterations
@@ -155,9 +156,9 @@
 //! (8 steps) 134 → 125, the same solutions; 972k unknowns (4 steps, 8 sweeps through two
 //! layers) 7.66 → 6.77 s per step, 104 → 84 Newton iterations, its last step (several
 //! solutions) landing on another (5 019 slipping nodes against 5 082): the early convex problems
-//! are solved to 10⁻³ only, and a different inner path moves the loop within that. Not tried: a line search on a merit function of
-//! the whole convex problem (its energy, for frozen θ), a descent where the residual's largest
-//! nodal value need not be.
+//! are solved to 10⁻³ only, and a different inner path moves the loop within that. Not tried: a
+//! line search on a merit function of the whole convex problem (its energy, for frozen θ), a
+//! descent where the residual's largest nodal value need not be.
 //!
 //! **Inexact Newton solves (`solver.krylov_forcing`, default 0.01).** Each Newton iteration's
 //! Krylov solve starts from the last iterate with its residual carried (only Γ_C's rows and the
