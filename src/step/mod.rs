@@ -627,7 +627,7 @@ pub struct StepFailure {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub residual_history: Vec<f64>,
     /// The period of the cycle the loop was found in, where it was given up on one
-    /// ([`convexification`]'s cycle rule, periods up to 8) rather than at its cap (a byte: the
+    /// (the convexification loop's cycle rule, periods up to 8) rather than at its cap (a byte: the
     /// failure travels inside every run's error type, which clippy keeps small).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cycle: Option<u8>,
