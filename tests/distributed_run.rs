@@ -381,6 +381,34 @@ mod distributed {
         );
     }
 
+    /// A thin slab at k = 1/8 whose convex problems' Newton steps flip nodes and are cut back
+    /// along themselves (`solver.backtracking`): every rank takes the same cuts, from the same
+    /// gathered w and ξ, and ends where one process does.
+    #[test]
+    fn backtracked_newton_steps_on_two_and_three_ranks_equal_one_process() {
+        let args = scenario_with(
+            "paper3d.toml",
+            &[
+                "mesh.nx=52",
+                "mesh.ny=3",
+                "mesh.nz=3",
+                "time.steps=16",
+                "time.final_time=2",
+                "output.times=[1,2]",
+                "solver.linear=\"iterative\"",
+                "solver.contact_sweeps=8",
+                "solver.condensed_layers=2",
+            ],
+        );
+        agrees_over_ranks("paper3d-backtracked", &args);
+        let one = std::env::temp_dir().join(format!("thermocontact-backtracked-{}", std::process::id()));
+        let output = run(1, &one, &args);
+        assert!(output.status.success(), "{}", text(&output));
+        let backtracked = summary_of(&one)["backtracked_newton_iterations"].as_u64().unwrap();
+        assert!(backtracked > 0, "the case should backtrack");
+        let _ = std::fs::remove_dir_all(&one);
+    }
+
     /// The brake pad (a Gmsh mesh, a moving counter-face, friction from the contact pressure,
     /// thermal conditions): its stiffness weighs, so `auto` takes the two-level method (GAMG on
     /// the velocity block between the ranks' ILU(0) sweeps, as one process does), without which
