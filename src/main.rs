@@ -389,6 +389,40 @@ fn chain(error: &anyhow::Error) -> String {
     text
 }
 
+/// What to try after a run whose linear solves ran out of Krylov iterations with ILU(0) alone
+/// (`preconditioner` the run's setting): ILU(0) keeps them short while the mass term dominates,
+/// not where the stiffness weighs, which is what the two-level preconditioner is for. None after
+/// any other error, or where that preconditioner could have been taken (`auto` or `amg` in a
+/// build with PETSc).
+fn krylov_hint(
+    error: &thermocontact::Error,
+    preconditioner: thermocontact::step::PreconditionerKind,
+) -> Option<String> {
+    use thermocontact::step::{Criterion, PreconditionerKind};
+    use thermocontact::time::TimeError;
+    let thermocontact::Error::Time(TimeError::NotConverged { failure, .. }) = error else {
+        return None;
+    };
+    if failure.criterion != Criterion::LinearResidual {
+        return None;
+    }
+    let why = "hint: the linear solves ran out of Krylov iterations (`solver.max_krylov`) with ILU(0) alone, \
+               which keeps them short while the mass term dominates (the paper's k) but not where the stiffness \
+               weighs (a large k, a stiff or thin body)";
+    let direct = "or `solver.linear = \"direct\"` solves each step exactly where the body fits in memory";
+    match (cfg!(feature = "petsc"), preconditioner) {
+        (false, _) => Some(format!(
+            "{why}: a build with `--features petsc` (PETSc from Debian: README, Install) takes the two-level \
+             preconditioner there (`solver.preconditioner = \"auto\"`, the default, or `\"amg\"`), {direct}"
+        )),
+        (true, PreconditionerKind::Ilu) => Some(format!(
+            "{why}: `solver.preconditioner = \"auto\"` (the default) or `\"amg\"` takes the two-level \
+             preconditioner, {direct}"
+        )),
+        (true, _) => None,
+    }
+}
+
 /// What a stopped run left in its folder, for the message after its error: only the files that
 /// are there (a run that fails before its first step has written no checkpoint, or nothing).
 fn stopped_run_hint(out: &std::path::Path) -> String {
@@ -686,7 +720,12 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 driver::run(&problem, &params, &scenario.output_plan(), &options).inspect_err(|error| match error {
                     thermocontact::Error::Folder(_) | thermocontact::Error::Checkpoint(_) => {}
                     _ if !root => {}
-                    _ => eprintln!("{}", stopped_run_hint(&out)),
+                    _ => {
+                        eprintln!("{}", stopped_run_hint(&out));
+                        if let Some(hint) = krylov_hint(error, params.krylov.preconditioner) {
+                            eprintln!("{hint}");
+                        }
+                    }
                 })?;
             if !root {
                 return Ok(());

@@ -584,3 +584,44 @@ fn a_step_cut_back_says_why() {
     assert!(why.len() >= cut_steps, "{why:?}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// A run stopped by linear solves that ran out of Krylov iterations with ILU(0) alone says what
+/// takes such a body: the two-level preconditioner (a `petsc` build) or the direct path; after
+/// another failure (the convexification loop's) it says nothing of the kind.
+#[test]
+fn a_run_stopped_by_its_krylov_solves_says_what_to_try() {
+    let out = scratch("krylov-hint");
+    let run = |sets: &[&str]| {
+        let mut command = bin();
+        command.args(["run", "--quiet", "--out"]).arg(&out).arg("--overwrite");
+        let base = ["mesh.nx=16", "mesh.ny=4", "time.steps=4", "solver.cutback=false"];
+        for set in base.iter().chain(sets) {
+            command.args(["--set", set]);
+        }
+        let output = command.output().unwrap();
+        assert!(!output.status.success());
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let krylov = run(&[
+        "solver.linear=iterative",
+        "solver.max_krylov=1",
+        "solver.preconditioner=ilu",
+    ]);
+    assert!(krylov.contains("relative residual of the linear solve"), "{krylov}");
+    let hint = krylov
+        .lines()
+        .find(|l| l.starts_with("hint: "))
+        .unwrap_or_else(|| panic!("{krylov}"));
+    for part in [
+        "ILU(0) alone",
+        "`solver.max_krylov`",
+        "`\"amg\"`",
+        "`solver.linear = \"direct\"`",
+    ] {
+        assert!(hint.contains(part), "`{part}` missing in: {hint}");
+    }
+    let loop_failure = run(&["solver.max_sweeps=0", "solver.max_convexification=2"]);
+    assert!(loop_failure.contains("convexification loop stopped"), "{loop_failure}");
+    assert!(!loop_failure.contains("hint: "), "{loop_failure}");
+    std::fs::remove_dir_all(&out).ok();
+}
