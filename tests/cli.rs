@@ -262,19 +262,20 @@ fn batch_runs_log_progress_lines_and_steps_csv_has_slip_and_stick_counts() {
     assert_eq!(lines.len(), 4, "{stderr}");
     assert!(lines[3].starts_with("step 16/16 t = 1.000000: "), "{stderr}");
     for line in &lines {
-        for part in [
-            " convexification, ",
-            " inner, ",
-            " Newton, ",
-            " steps cut back so far; ",
-            " slip, ",
-            " stick; ",
-            "law residual ",
-            "elapsed ",
-            "remaining ",
-        ] {
-            assert!(line.contains(part), "`{part}` missing in: {line}");
-        }
+        assert_has_parts(
+            line,
+            &[
+                " convexification, ",
+                " inner, ",
+                " Newton, ",
+                " steps cut back so far; ",
+                " slip, ",
+                " stick; ",
+                "law residual ",
+                "elapsed ",
+                "remaining ",
+            ],
+        );
     }
 
     let steps = std::fs::read_to_string(out.join("steps.csv")).unwrap();
@@ -563,14 +564,15 @@ fn a_step_cut_back_says_why() {
         .filter(|l| l.contains("; cut back to substeps of k/"))
         .collect();
     for line in &why {
-        for part in [
-            "  step ",
-            ": from t = ",
-            "the fast solver's convexification loop stopped after 5 iterations: ",
-            " > tolerance 1e-6",
-        ] {
-            assert!(line.contains(part), "`{part}` missing in: {line}");
-        }
+        assert_has_parts(
+            line,
+            &[
+                "  step ",
+                ": from t = ",
+                "the fast solver's convexification loop stopped after 5 iterations: ",
+                " > tolerance 1e-6",
+            ],
+        );
     }
     assert!(
         why.iter().any(|l| l.ends_with("cut back to substeps of k/2")),
@@ -612,16 +614,24 @@ fn a_run_stopped_by_its_krylov_solves_says_what_to_try() {
         .lines()
         .find(|l| l.starts_with("hint: "))
         .unwrap_or_else(|| panic!("{krylov}"));
-    for part in [
-        "ILU(0) alone",
-        "`solver.max_krylov`",
-        "`\"amg\"`",
-        "`solver.linear = \"direct\"`",
-    ] {
-        assert!(hint.contains(part), "`{part}` missing in: {hint}");
-    }
+    assert_has_parts(
+        hint,
+        &[
+            "ILU(0) alone",
+            "`solver.max_krylov`",
+            "`\"amg\"`",
+            "`solver.linear = \"direct\"`",
+        ],
+    );
     let loop_failure = run(&["solver.max_sweeps=0", "solver.max_convexification=2"]);
     assert!(loop_failure.contains("convexification loop stopped"), "{loop_failure}");
     assert!(!loop_failure.contains("hint: "), "{loop_failure}");
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// Every one of `parts` in `line`.
+fn assert_has_parts(line: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(line.contains(part), "`{part}` missing in: {line}");
+    }
 }
