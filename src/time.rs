@@ -68,6 +68,8 @@ pub struct Levels<'a> {
     setup_stats: Cell<SystemStats>,
     /// Seconds spent on the steps' energies ([`crate::model::energy`]).
     energy_seconds: Cell<f64>,
+    /// Why the last step cut back was: its failure at its full length.
+    cut_back_because: std::cell::RefCell<Option<StepFailure>>,
 }
 
 impl<'a> Levels<'a> {
@@ -84,6 +86,7 @@ impl<'a> Levels<'a> {
             setup_seconds: Cell::new(0.0),
             setup_stats,
             energy_seconds: Cell::new(0.0),
+            cut_back_because: std::cell::RefCell::new(None),
         }
     }
 
@@ -123,6 +126,12 @@ impl<'a> Levels<'a> {
     /// Seconds spent so far on the steps' energies.
     pub fn energy_seconds(&self) -> f64 {
         self.energy_seconds.get()
+    }
+
+    /// Why the last step that was cut back was: how its solve at its full length failed (taken:
+    /// the next call returns `None` until another step is cut back).
+    pub fn take_cutback_reason(&self) -> Option<StepFailure> {
+        self.cut_back_because.borrow_mut().take()
     }
 
     /// The solver of the problem's own step size.
@@ -173,6 +182,9 @@ impl<'a> Levels<'a> {
                     });
                 }
                 crate::step::heartbeat::cut_back(previous.t, t, depth + 1, &failure);
+                if depth == 0 {
+                    *self.cut_back_because.borrow_mut() = Some(failure);
+                }
                 let middle = previous.t + 0.5 * (t - previous.t);
                 let (half, mut info) = self.advance(previous, middle, depth + 1, n)?;
                 let (end, rest) = self.advance(&half, t, depth + 1, n)?;

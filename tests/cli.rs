@@ -579,8 +579,24 @@ fn a_step_cut_back_says_why() {
         "{why:?}"
     );
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    let cut_steps = summary["cutbacks"].as_array().unwrap().len();
+    let cutbacks = summary["cutbacks"].as_array().unwrap();
+    let cut_steps = cutbacks.len();
     assert!(cut_steps > 0);
+    // summary.json keeps each cut-back step's reason: its failure at the full k, the first of
+    // the log's lines for that step.
+    for cutback in cutbacks {
+        let reason = cutback["reason"].as_str().unwrap_or_else(|| panic!("{cutback}"));
+        assert!(
+            reason.starts_with("the fast solver's convexification loop stopped after 5 iterations: "),
+            "{reason}"
+        );
+        let (step, t) = (cutback["step"].as_u64().unwrap(), cutback["t"].as_f64().unwrap());
+        let first = why
+            .iter()
+            .find(|l| l.starts_with(&format!("  step {step} (t = {t}): ")))
+            .unwrap();
+        assert!(first.contains(reason), "{first} / {reason}");
+    }
     assert_eq!(stderr.matches(": cut back, ").count(), cut_steps, "{stderr}");
     // Each cut-back step failed once at k, and each failed substep adds a line.
     assert!(why.len() >= cut_steps, "{why:?}");

@@ -147,6 +147,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 t: state.t,
                 depth: info.cutback_depth,
                 substeps: info.substeps,
+                reason: self.levels.take_cutback_reason().map(|failure| failure.to_string()),
             });
         }
         step

@@ -334,7 +334,7 @@ pub struct AmgRecord {
 }
 
 /// A step that went through substeps.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CutbackRecord {
     /// Time level n of the step and t_n.
     pub step: usize,
@@ -343,6 +343,10 @@ pub struct CutbackRecord {
     pub depth: usize,
     /// Substeps taken.
     pub substeps: usize,
+    /// Why the step was cut back: how its solve at the full k failed (the loop, its iterations,
+    /// the criterion and by how much); none in checkpoints from before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
 }
 
 /// Why a run stopped.
