@@ -50,7 +50,9 @@ pub enum FactorStage {
     IncompleteLu,
     /// An AMG hierarchy (PETSc's GAMG).
     Multigrid,
-    /// The sparse LU of the bulk rows next to Γ_C (the predicted bounds' condensed rows).
+    /// The step matrix condensed onto Γ_C through the bulk rows next to it (the predicted
+    /// bounds' sweeps through the body: their Gauss–Seidel sweeps on those rows, or their rows
+    /// missing on a rank).
     CondensedLayers,
 }
 
@@ -64,7 +66,7 @@ impl std::fmt::Display for FactorStage {
             FactorStage::Cholesky => "the dense Cholesky factor",
             FactorStage::IncompleteLu => "the incomplete LU factor ILU(0)",
             FactorStage::Multigrid => "the AMG hierarchy (PETSc GAMG)",
-            FactorStage::CondensedLayers => "the LU of the bulk layers next to Γ_C (solver.condensed_layers)",
+            FactorStage::CondensedLayers => "the condensation of the bulk layers next to Γ_C (solver.condensed_layers)",
         })
     }
 }

@@ -25,7 +25,8 @@ pub const MAX_CONTACT_SWEEPS: usize = 8;
 
 /// The most layers of bulk unknowns `solver.condensed_layers` condenses through (two carry what
 /// matters: at 47k unknowns and k = 1/8, 105 Newton iterations over 8 steps with 2, 101 with 4,
-/// 99 with the whole body; each layer adds about |Γ_C| nodes to the LU, `step::contact_condensation`).
+/// 99 with the whole body; each layer adds about |Γ_C| nodes to the rows condensed once per step
+/// size, `step::contact_condensation`).
 pub const MAX_CONDENSED_LAYERS: usize = 8;
 
 /// The largest magnitude a scenario number may have. Every datum enters the step matrix or its
