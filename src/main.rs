@@ -152,12 +152,17 @@ enum Command {
         #[arg(long)]
         friction_bound_3d: Option<f64>,
         /// The 3D suite's iterative runs with their convexification iterates' bounds predicted
-        /// by this many symmetric nonlinear Gauss–Seidel sweeps over Γ_C (`solver.contact_sweeps`;
-        /// default: the scenario's 0, the paper's loop; docs/solvers.md).
+        /// by this many symmetric Gauss–Seidel sweeps over Γ_C (`solver.contact_sweeps`;
+        /// default: the scenario's 1; 0: the paper's loop; docs/solvers.md).
         #[arg(long)]
         contact_sweeps_3d: Option<usize>,
+        /// What those sweeps relax the contact nodes with (`solver.prediction`): `loop` (the
+        /// convexification loop on Γ_C's rows, the scenario's default) or `law` (the friction
+        /// law itself; docs/solvers.md).
+        #[arg(long, value_parser = ["loop", "law"])]
+        prediction_3d: Option<String>,
         /// Those sweeps with the step matrix condensed onto Γ_C through this many layers of the
-        /// body next to it (`solver.condensed_layers`; default: the scenario's 0, Γ_C's own
+        /// body next to it (`solver.condensed_layers`; default: the scenario's 2; 0: Γ_C's own
         /// rows; docs/solvers.md).
         #[arg(long)]
         condensed_layers_3d: Option<usize>,
@@ -603,6 +608,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
             preconditioners,
             friction_bound_3d,
             contact_sweeps_3d,
+            prediction_3d,
             condensed_layers_3d,
         } => {
             if three_d {
@@ -615,6 +621,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                     preconditioners,
                     overrides: (friction_bound_3d.map(|s| format!("friction.bound={s}")).into_iter())
                         .chain(contact_sweeps_3d.map(|n| format!("solver.contact_sweeps={n}")))
+                        .chain(prediction_3d.map(|p| format!("solver.prediction=\"{p}\"")))
                         .chain(condensed_layers_3d.map(|n| format!("solver.condensed_layers={n}")))
                         .collect(),
                 };

@@ -335,8 +335,10 @@ mod distributed {
         );
     }
 
-    /// The same with the loop's bounds predicted by a symmetric Gauss–Seidel sweep over Γ_C
-    /// (`solver.contact_sweeps`): every rank sweeps the same nodes from the same numbers.
+    /// The same with the loop's bounds predicted by a symmetric Gauss–Seidel sweep of the law
+    /// over Γ_C's own rows (`solver.prediction = "law"`, `solver.condensed_layers = 0`; the
+    /// default, the loop on Γ_C's rows through two layers, runs in every other test here):
+    /// every rank sweeps the same nodes from the same numbers.
     #[test]
     fn predicted_bounds_on_two_and_three_ranks_equal_one_process() {
         agrees_over_ranks(
@@ -352,12 +354,14 @@ mod distributed {
                     "output.times=[0.0625,0.125]",
                     "solver.linear=\"iterative\"",
                     "solver.contact_sweeps=1",
+                    "solver.prediction=\"law\"",
+                    "solver.condensed_layers=0",
                 ],
             ),
         );
     }
 
-    /// The same at a coarse k with 8 sweeps through two layers of the body
+    /// The same at a coarse k with 8 sweeps of the law through two layers of the body
     /// (`solver.condensed_layers`): every rank assembles the layers' rows and condenses the same
     /// numbers (`ProblemBuilder::contact_layers`).
     #[test]
@@ -375,6 +379,7 @@ mod distributed {
                     "output.times=[0.5,1]",
                     "solver.linear=\"iterative\"",
                     "solver.contact_sweeps=8",
+                    "solver.prediction=\"law\"",
                     "solver.condensed_layers=2",
                 ],
             ),
@@ -397,6 +402,7 @@ mod distributed {
                 "output.times=[1,2]",
                 "solver.linear=\"iterative\"",
                 "solver.contact_sweeps=8",
+                "solver.prediction=\"law\"",
                 "solver.condensed_layers=2",
             ],
         );
@@ -484,6 +490,8 @@ mod distributed {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// The 2D example with the paper's loop (`solver.contact_sweeps = 0`, one solve per
+    /// iterate).
     #[test]
     fn the_2d_example_on_two_and_three_ranks_equals_one_process() {
         agrees_over_ranks(
@@ -495,6 +503,7 @@ mod distributed {
                     "mesh.ny=8",
                     "time.steps=16",
                     "solver.linear=\"iterative\"",
+                    "solver.contact_sweeps=0",
                 ],
             ),
         );

@@ -651,6 +651,7 @@ impl Scenario {
             },
             anderson_depth: s.anderson_depth,
             contact_sweeps: s.contact_sweeps,
+            prediction: s.prediction,
             backtracking: s.backtracking,
         }
     }

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use toml::Value;
 
 use crate::mesh::Mesh;
-use crate::step::{LinearKind, PreconditionerKind, SolverKind};
+use crate::step::{LinearKind, PreconditionerKind, Prediction, SolverKind};
 
 /// A complete, validated scenario.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -646,6 +646,7 @@ pub struct SolverSpec {
     pub overlap: usize,
     pub anderson_depth: usize,
     pub contact_sweeps: usize,
+    pub prediction: Prediction,
     pub condensed_layers: usize,
     pub backtracking: bool,
 }

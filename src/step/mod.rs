@@ -99,8 +99,39 @@ pub struct KrylovParams {
     /// The layers of bulk unknowns next to Γ_C through which the predicted bounds' sweeps see
     /// the body follow (`solver.condensed_layers`: the step matrix condensed onto Γ_C through
     /// them, `contact_condensation`; at the first sweep in one process, at set-up on the ranks,
-    /// which then also assemble those layers' rows). Default 0: Γ_C's own rows, the body held.
+    /// which then also assemble those layers' rows). 0: Γ_C's own rows, the body held.
+    /// Default 2.
     pub condensed_layers: usize,
+}
+
+/// How the iterative path's sweeps over Γ_C predict the bounds of each convexification iterate
+/// after the first (`solver.prediction`; [`SolverParams::contact_sweeps`] sweeps, through
+/// [`KrylovParams::condensed_layers`] layers of the body; the `newton_krylov` module header).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Prediction {
+    /// The convexification loop itself, run on Γ_C's rows between two solves: each node's
+    /// bound frozen at its slip after the last bound update, the sweeps solving that convex
+    /// problem on the rows, the bounds of its slip the next update's, until they settle. The
+    /// loop's front is carried where the solves would carry it one ring at a time, so the step
+    /// lands on the paper's loop's solution where the rows model the body well (every case
+    /// measured with one solution per step, and the 3D example at 17k unknowns over 64 steps).
+    #[default]
+    Loop,
+    /// Each node's slip the local minimizer of its nodal problem with the law itself, reached
+    /// downhill from its current slip: a front crosses in fewer sweeps, but where a step has
+    /// several solutions it may settle on another than the loop's.
+    Law,
+}
+
+impl Prediction {
+    /// The name in scenarios and summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Prediction::Loop => "loop",
+            Prediction::Law => "law",
+        }
+    }
 }
 
 /// The largest [`KrylovParams::overlap`] there is.
@@ -154,7 +185,7 @@ impl Default for KrylovParams {
             preconditioner: PreconditionerKind::Ilu,
             distributed: false,
             overlap: 1,
-            condensed_layers: 0,
+            condensed_layers: 2,
         }
     }
 }
@@ -457,10 +488,14 @@ pub struct SolverParams {
     /// Depth of the Anderson acceleration of the iterative path's convexification loop in its
     /// linear tail (`anderson::TailAnderson`; 0: off).
     pub anderson_depth: usize,
-    /// Symmetric nonlinear Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate of the
-    /// iterative path's convexification loop after its first (0: the paper's loop; another
-    /// rule where a step has several solutions: docs/solvers.md).
+    /// Symmetric Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate of the
+    /// iterative path's convexification loop after its first, per bound update of the loop on
+    /// Γ_C's rows ([`Prediction::Loop`]) or in all ([`Prediction::Law`]). 0: the paper's loop,
+    /// one solve per iterate. Default 1.
     pub contact_sweeps: usize,
+    /// What those sweeps relax each contact node with (`solver.prediction`). Default
+    /// [`Prediction::Loop`].
+    pub prediction: Prediction,
     /// Cut back a Newton step of the iterative path's convex problems that raises the law's
     /// residual (`newton_krylov`; false: every full step, as before 2026-11-29's fourth session).
     pub backtracking: bool,
@@ -490,7 +525,8 @@ impl Default for SolverParams {
             linear: LinearKind::Auto,
             krylov: KrylovParams::default(),
             anderson_depth: 2,
-            contact_sweeps: 0,
+            contact_sweeps: 1,
+            prediction: Prediction::Loop,
             backtracking: true,
         }
     }

@@ -36,12 +36,14 @@
 //! resolves: 16.5 → 13.75 Newton iterations per step at 1.05M unknowns), the plain loop where
 //! it is short (the example's own S = 150, whose tails converge 50–100× per iterate).
 //!
-//! **Predicted bounds (`solver.contact_sweeps`, off by default).** The loop's iterates follow
+//! **Predicted bounds (`solver.contact_sweeps`, `solver.prediction`; since 2026-11-29's fifth
+//! session on by default, as the loop on Γ_C's rows below).** The loop's iterates follow
 //! the slip front (below): a node that starts slipping keeps the bound of its last slip for
 //! the whole iterate, and its neighbours feel it only in the next, so the zone spreads and
 //! deepens about one ring per iterate. From a step's second iterate on, the bounds may instead
-//! be frozen at the slip that symmetric nonlinear Gauss–Seidel sweeps over Γ_C predict
-//! ([`Linearization::gauss_seidel_slip`]): each contact node's tangential rows of A solved with
+//! be frozen at the slip that symmetric Gauss–Seidel sweeps over Γ_C predict
+//! ([`Linearization::predicted_slip`]). The first such prediction (`prediction = "law"`),
+//! described here, solves each contact node's tangential rows of A with
 //! the law itself, every other unknown at its latest value, the node's slip the local minimizer
 //! reached downhill from its current one (the descent's nodal search,
 //! [`super::descent::radial_minimizer`]), node by node in Γ_C's order and then back. A node
@@ -93,6 +95,41 @@
 //! is the same with the condensed rows as with A's (`node_rows` and `condensed_node_rows` give
 //! the node's s and block to one `relax_node`): the residual b − A x at the iterate, where the
 //! other rows hold, changes by −S Δ when Γ_C's velocities change by Δ.
+//!
+//! *The loop on Γ_C's rows (`prediction = "loop"`, the default, with one sweep per update
+//! through two layers).* The law's sweeps let each node settle at its nodal problem's local
+//! minimizer before its neighbour is relaxed, an order of events the loop does not follow:
+//! where a step has several solutions they settle on another than the loop's (the 3D example
+//! at 17k unknowns from step 12 on, the coarse 12 × 3 × 3 one at one step; fields up to 87 %
+//! apart at the end of the 64 steps). The loop on Γ_C's rows instead runs the convexification
+//! loop itself between two solves: each node's bound frozen at g_i = b_i(|z_i|) of its slip
+//! at the last update, `contact_sweeps` sweeps over the rows solving that convex problem
+//! (the nodal root of κ s + ℓ_i g_i = |σ_i|, unique), the bounds of the new slip the next
+//! update's, until no bound moves by more than [`LAG_TOLERANCE`] of the largest (at most
+//! [`MAX_LAGS`] updates). It moves the front one ring per update as the loop moves it one ring
+//! per solve, on rows that follow the body through the condensation, so the global iterates
+//! take the loop's path in a few solves instead of one per ring, and the loop's stop test
+//! decides as before. Measured against the paper's loop on the iterative path (release; the
+//! 3D example, `--set solver.linear=iterative`, and `contact_sweeps = 0` for the loop):
+//!
+//! | case | paper's loop: Newton iterations | loop on Γ_C's rows | agreement |
+//! |---|---|---|---|
+//! | 40 × 10 × 10 cells (17k unknowns), 64 steps of 1/64 | 1 024 | **420** | every step's slip count; fields within 6.4·10⁻⁷ (the law's sweeps: 351, parting at step 12, 0.87) |
+//! | 12 × 3 × 3, 16 steps | 115 | 84 | the same, 1.9·10⁻⁸ (the law's sweeps part at one step) |
+//! | 56 × 14 × 14 (47k), 8 steps of 1/8 | 857 | **100** | one step's count 688 against 686 (the law's: two steps) |
+//! | 104 × 6 × 6 slab, 16 steps of 1/64 | 1 373 | **139** | the same, 2.3·10⁻⁷ |
+//! | 104 × 6 × 6 slab, 16 steps of 1/8 | 3 444, one step cut back | **310**, none | the direct path's counts but at two steps (one node each); the iterative paper's loop, cut back, parts at step 6 |
+//! | 2D example (paper.toml), 64 steps | 380 | 320 | the same, 1.6·10⁻⁸ |
+//! | `own_laws3d.toml`, 64 steps | 2 772 | 1 504 | the same, 4.9·10⁻⁶ |
+//! | `pad3d.toml` (several solutions per step), 32 steps | 577 | 265 | 6 steps' counts one node apart |
+//! | 156 × 39 × 39 (972k), 4 steps of 1/64 | 64 (3.5 s per step) | **27 (0.88 s)** | |
+//! | 972k, 4 steps of 1/8 | 406 (23.3 s per step) | **96 (8.3 s)** | steps 3, 4: 4 206, 5 019 slipping nodes against 4 213, 5 016 |
+//!
+//! Four sweeps per update instead of one, or updates to 10⁻⁷ instead of 10⁻⁴, change no slip
+//! count on the slab at k = 1/8 or the pad, nor do four layers instead of two: where the loop
+//! on the rows parts from the paper's loop, the global loop's path does, not the rows' model.
+//! Where it fails, the way out is the loop with the law's sweeps from the step's start, then
+//! Newton on the law, as for the paper's loop.
 //!
 //! *The way out of the paper's loop.* Where the paper's loop fails (`solver.max_convexification`
 //! iterates without converging), the loop with predicted bounds runs again from the step's
@@ -343,7 +380,7 @@ use super::anderson::TailAnderson;
 use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
 use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
 use super::newton::{node_law_residual, slip_linearization};
-use super::{all_hold, Criterion, SolveError, StepInfo};
+use super::{all_hold, Criterion, Prediction, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
 use crate::la::CsrMatrix;
 use crate::model::{ContactLaws, Problem, State};
@@ -364,8 +401,18 @@ enum Linearized {
 const INNER_CEILING: f64 = 1e-3;
 
 /// Symmetric Gauss–Seidel sweeps over Γ_C that predict the bounds of the loop run again where
-/// the paper's loop fails (the first way out, before Newton on the nonmonotone law).
+/// the paper's loop fails (the first way out, before Newton on the nonmonotone law), with the
+/// law ([`Prediction::Law`]).
 const WAY_OUT_SWEEPS: usize = 1;
+
+/// The loop on Γ_C's rows ([`Prediction::Loop`]) stops once no bound moved by more than this
+/// fraction of the largest in an update. 10⁻⁷ instead changes no slip count on the thin slab
+/// at k = 1/8 or the pad (module header).
+const LAG_TOLERANCE: f64 = 1e-4;
+
+/// The most bound updates of the loop on Γ_C's rows per prediction (each `contact_sweeps`
+/// sweeps: a pass over Γ_C's rows each, 5–6 ms at 972k unknowns).
+const MAX_LAGS: usize = 200;
 
 /// Predicted iterates whose law residuals stay within this factor of each other (three in a
 /// row) while their increments converge have stalled ([`SemismoothNewton::prediction_stalled`]).
@@ -443,41 +490,69 @@ impl Linearization<'_> {
             .collect()
     }
 
-    /// The slip that `sweeps` symmetric nonlinear Gauss–Seidel sweeps over the contact nodes
-    /// predict from the iterate (x, w): node by node, in Γ_C's order and then back, the node's
-    /// tangential rows of A with every other unknown at its latest value (the nodes relaxed
-    /// before it at their new ones, the rest of x frozen) and the friction law itself,
-    /// −ξ_i = b_i(|z_i|) z_i/|z_i| for the relative slip z_i = w_i − v_F,i: with κ the mean of
-    /// the node's diagonal entries (its off-diagonal block taken at the current w_i), z_i ∥ σ_i
-    /// and |z_i| is the nodal problem's local minimizer κ s + ℓ_i b_i(s) = |σ_i| reached downhill
-    /// from the current slip ([`super::descent::radial_minimizer`]). The backward pass carries a
-    /// slip front that moves against Γ_C's order as far in one sweep as the forward pass one that
-    /// moves with it (the module header). Returns the predicted relative slip, node-major as w.
-    fn gauss_seidel_slip(&self, x: &[f64], w: &[f64], sweeps: usize) -> Result<Vec<f64>, SolveError> {
+    /// The slip that symmetric Gauss–Seidel sweeps over the contact nodes predict from the
+    /// iterate (x, w): node by node, in Γ_C's order and then back, the node's tangential rows
+    /// (of A, or of A condensed onto Γ_C through the layers of the body next to it) with every
+    /// other unknown at its latest value (the nodes relaxed before it at their new ones, the
+    /// rest of x frozen), solved for the node's relative slip z_i = w_i − v_F,i with
+    /// −ξ_i = g_i z_i/|z_i|: with κ the mean of the node's diagonal entries (its off-diagonal
+    /// block taken at the current w_i), z_i ∥ σ_i and |z_i| is the root of κ s + ℓ_i g_i = |σ_i|
+    /// reached downhill from the current slip ([`super::descent::radial_minimizer`]). What g_i
+    /// is, is the `prediction`:
+    ///
+    /// * [`Prediction::Loop`]: the bound of the node's slip at the last bound update, held for
+    ///   `sweeps` sweeps, then updated from the new slips, until no bound moves by more than
+    ///   [`LAG_TOLERANCE`] of the largest (at most [`MAX_LAGS`] updates): the convexification
+    ///   loop itself on these rows, each convex problem solved by the sweeps;
+    /// * [`Prediction::Law`]: b_i(s) itself, `sweeps` sweeps (the nodal problem's local
+    ///   minimizer downhill from the current slip).
+    ///
+    /// The backward pass carries a slip front that moves against Γ_C's order as far in one
+    /// sweep as the forward pass one that moves with it (the module header). Returns the
+    /// predicted relative slip, node-major as w.
+    fn predicted_slip(
+        &self,
+        x: &[f64],
+        w: &[f64],
+        (sweeps, prediction): (usize, Prediction),
+    ) -> Result<Vec<f64>, SolveError> {
         let first = self.system.first_contact;
         // The Γ_C tangential velocities, updated node by node; every other unknown stays.
         let mut contact = x[first..].to_vec();
         let mut slip = w.to_vec();
         let n = self.system.nodes.len();
-        let order = (0..n).chain((0..n).rev());
-        let Some(condensed) = self.system.condensed_rows(self.a)? else {
-            for _ in 0..sweeps {
-                for i in order.clone() {
-                    let rows = self.node_rows(i, x, &contact);
-                    self.relax_node(i, rows, &mut contact, &mut slip);
-                }
-            }
-            return Ok(slip);
-        };
+        let condensed = self.system.condensed_rows(self.a)?;
         // Through the body: Γ_C's residual r = b − A x at the iterate, where the other rows
         // hold, changes by −S Δ when Γ_C's velocities change by Δ.
-        let residual: Vec<f64> = (first..self.b.len())
-            .map(|row| self.b[row] - self.base_row_times(row, x))
-            .collect();
-        for _ in 0..sweeps {
-            for i in order.clone() {
-                let rows = self.condensed_node_rows(i, (&condensed, &residual), &x[first..], &contact);
-                self.relax_node(i, rows, &mut contact, &mut slip);
+        let residual: Vec<f64> = match condensed {
+            Some(_) => (first..self.b.len())
+                .map(|row| self.b[row] - self.base_row_times(row, x))
+                .collect(),
+            None => Vec::new(),
+        };
+        let sweep = |contact: &mut Vec<f64>, slip: &mut Vec<f64>, frozen: Option<&[f64]>| {
+            for i in (0..n).chain((0..n).rev()) {
+                let rows = match &condensed {
+                    Some(condensed) => self.condensed_node_rows(i, (condensed, &residual), &x[first..], contact),
+                    None => self.node_rows(i, x, contact),
+                };
+                self.relax_node(i, rows, frozen.map(|bounds| bounds[i]), contact, slip);
+            }
+        };
+        match prediction {
+            Prediction::Law => (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, None)),
+            Prediction::Loop => {
+                let mut bounds = self.laws.bounds(&slip);
+                let scale = bounds.iter().fold(0.0f64, |s, &b| s.max(b));
+                for _ in 0..MAX_LAGS {
+                    (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, Some(&bounds)));
+                    let next = self.laws.bounds(&slip);
+                    let moved = next.iter().zip(&bounds).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                    bounds = next;
+                    if moved <= LAG_TOLERANCE * scale {
+                        break;
+                    }
+                }
             }
         }
         Ok(slip)
@@ -551,10 +626,18 @@ impl Linearization<'_> {
         at
     }
 
-    /// One node's step of [`Self::gauss_seidel_slip`] from its rows at the sweep's state: its
-    /// tangential velocities in `contact` (Γ_C's unknowns, the system's order from
-    /// `first_contact`) and its relative slip in `slip`.
-    fn relax_node(&self, i: usize, NodeRowsAt { s, block }: NodeRowsAt, contact: &mut [f64], slip: &mut [f64]) {
+    /// One node's step of [`Self::predicted_slip`] from its rows at the sweep's state, with the
+    /// bound `frozen` (the law itself where `None`): its tangential velocities in `contact`
+    /// (Γ_C's unknowns, the system's order from `first_contact`) and its relative slip in
+    /// `slip`.
+    fn relax_node(
+        &self,
+        i: usize,
+        NodeRowsAt { s, block }: NodeRowsAt,
+        frozen: Option<f64>,
+        contact: &mut [f64],
+        slip: &mut [f64],
+    ) {
         let sys = self.system;
         let (td, first) = (self.td, sys.first_contact);
         let node = &sys.nodes[i];
@@ -579,7 +662,7 @@ impl Linearization<'_> {
         }
         let sigma_norm = norm(&sigma[..m]);
         let radius = super::descent::radial_minimizer(
-            |r| self.laws.bound(i, r),
+            |r| frozen.unwrap_or_else(|| self.laws.bound(i, r)),
             kappa,
             node.weight,
             sigma_norm / kappa,
@@ -730,9 +813,11 @@ pub struct NewtonKrylov<'a> {
     max_iterations: usize,
     /// Depth of the Anderson acceleration of the loop's tail ([`TailAnderson`]; 0: off).
     anderson_depth: usize,
-    /// Nonlinear Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the
-    /// first (`solver.contact_sweeps`; 0: the paper's loop).
+    /// Gauss–Seidel sweeps over Γ_C that predict each iterate's bounds after the first
+    /// (`solver.contact_sweeps`; 0: the paper's loop), and what they relax the nodes with
+    /// (`solver.prediction`).
     contact_sweeps: usize,
+    prediction: Prediction,
     /// Whether a convex problem's Newton step that raises the law's residual is cut back
     /// ([`SemismoothNewton::backtrack`], `solver.backtracking`).
     backtracking: bool,
@@ -769,7 +854,7 @@ impl<'a> NewtonKrylov<'a> {
         system: KrylovSystem,
         tolerance: f64,
         max_iterations: usize,
-        (anderson_depth, contact_sweeps, backtracking): (usize, usize, bool),
+        (anderson_depth, (contact_sweeps, prediction), backtracking): (usize, (usize, Prediction), bool),
     ) -> Self {
         NewtonKrylov {
             problem,
@@ -778,6 +863,7 @@ impl<'a> NewtonKrylov<'a> {
             max_iterations,
             anderson_depth,
             contact_sweeps,
+            prediction,
             backtracking,
             last: std::sync::Mutex::new(None),
         }
@@ -866,6 +952,7 @@ impl<'a> NewtonKrylov<'a> {
             anderson: TailAnderson::new(self.anderson_depth),
             first_bounds: None,
             sweeps: self.contact_sweeps,
+            prediction: self.prediction,
             unpredicted: Vec::new(),
             predicted_history: Vec::new(),
         };
@@ -897,9 +984,9 @@ impl<'a> NewtonKrylov<'a> {
             Err(SolveError::NotConverged(failure)) => {
                 // The ways out, from the step's start: the loop with predicted bounds (where it
                 // was the paper's loop), then Newton on the nonmonotone law.
-                let predicted = match self.contact_sweeps {
-                    0 => newton.predicted_loop(step_start()?, &params, info)?,
-                    _ => None,
+                let predicted = match (self.contact_sweeps, self.prediction) {
+                    (sweeps, Prediction::Law) if sweeps > 0 => None,
+                    _ => newton.predicted_loop(step_start()?, &params, info)?,
                 };
                 match predicted {
                     Some(iterate) => iterate,
@@ -994,8 +1081,9 @@ struct SemismoothNewton<'s, 'a> {
     /// warm start): those of the previous step's slip, the paper's loop's.
     first_bounds: Option<Vec<f64>>,
     /// Symmetric Gauss–Seidel sweeps over Γ_C that predict the bounds of each iterate after
-    /// the first (0: the paper's loop).
+    /// the first (0: the paper's loop), and what they relax the nodes with.
     sweeps: usize,
+    prediction: Prediction,
     /// The contact nodes whose bounds the prediction no longer sets (a stall at them: below),
     /// frozen at their iterate's slip as in the paper's loop (empty: none).
     unpredicted: Vec<bool>,
@@ -1017,7 +1105,7 @@ impl SemismoothNewton<'_, '_> {
         self.linearization.residual.clear();
         self.anderson = TailAnderson::new(self.solver.anderson_depth);
         self.first_bounds = None;
-        self.sweeps = WAY_OUT_SWEEPS;
+        (self.sweeps, self.prediction) = (WAY_OUT_SWEEPS, Prediction::Law);
         self.unpredicted.clear();
         self.predicted_history.clear();
         // The step's iterates count both loops'.
@@ -1205,7 +1293,11 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             Some(bounds) => bounds,
             None if sweeps > 0 => {
                 info.predicted_iterates += 1;
-                let mut bounds = laws.bounds(&self.linearization.gauss_seidel_slip(&iterate.x, &iterate.w, sweeps)?);
+                let mut bounds = laws.bounds(&self.linearization.predicted_slip(
+                    &iterate.x,
+                    &iterate.w,
+                    (sweeps, self.prediction),
+                )?);
                 if !self.unpredicted.is_empty() {
                     let plain = laws.bounds(&iterate.w);
                     (bounds.iter_mut().zip(&plain).zip(&self.unpredicted))

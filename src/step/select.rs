@@ -89,7 +89,11 @@ impl<'a> StepSolver<'a> {
                         system,
                         params.tolerance,
                         params.max_convexification,
-                        (params.anderson_depth, params.contact_sweeps, params.backtracking),
+                        (
+                            params.anderson_depth,
+                            (params.contact_sweeps, params.prediction),
+                            params.backtracking,
+                        ),
                     )),
                 })
             }

@@ -214,21 +214,27 @@ pub fn hard_cases() -> Vec<HardCase> {
         ),
         case(
             "3d-iterative",
-            "the same on the iterative path (Newton–Krylov; where the loop fails, the loop with predicted bounds, then Newton on the law)",
+            "the same on the iterative path (Newton–Krylov, the loop's bounds predicted by the loop on Γ_C's rows through two layers of the body; where it fails, the loop with the law's sweeps, then Newton on the law)",
             Some("scenarios/paper3d.toml"),
             &iterative,
         ),
         case(
-            "3d-predicted",
-            "the same with the loop's bounds predicted by a symmetric sweep over Γ_C (solver.contact_sweeps = 1)",
+            "3d-paper-loop",
+            "the same with the paper's loop, one solve per iterate (solver.contact_sweeps = 0)",
             Some("scenarios/paper3d.toml"),
-            &[&iterative[..], &["solver.contact_sweeps=1"]].concat(),
+            &[&iterative[..], &["solver.contact_sweeps=0"]].concat(),
+        ),
+        case(
+            "3d-predicted",
+            "the same with the bounds of one sweep of the law over Γ_C's own rows (solver.prediction = \"law\", solver.condensed_layers = 0)",
+            Some("scenarios/paper3d.toml"),
+            &[&iterative[..], &["solver.prediction=\"law\"", "solver.condensed_layers=0"]].concat(),
         ),
         case(
             "3d-condensed",
-            "the same with 8 sweeps through two layers of the body (solver.contact_sweeps = 8, solver.condensed_layers = 2)",
+            "the same with 8 sweeps of the law through two layers of the body (solver.contact_sweeps = 8, solver.prediction = \"law\")",
             Some("scenarios/paper3d.toml"),
-            &[&iterative[..], &["solver.contact_sweeps=8", "solver.condensed_layers=2"]].concat(),
+            &[&iterative[..], &["solver.contact_sweeps=8", "solver.prediction=\"law\""]].concat(),
         ),
     ]
 }
