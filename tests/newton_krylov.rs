@@ -558,7 +558,7 @@ fn predicted_bounds_return_solutions_of_the_law_where_a_step_has_several() {
 /// stay bounded under refinement (at most 12 in every step: measured 7 and 9, where the paper's
 /// loop takes 21 and 76), no step is cut back, and where a step has several solutions its slip
 /// count stays within one node of the paper's loop's at every step (measured: one node apart at
-/// two and three steps of 8; the law's sweeps: up to three nodes, at five and six).
+/// three and two steps of 8; the law's sweeps: up to two and three nodes, at five steps each).
 #[test]
 fn the_loop_on_the_contact_rows_reaches_the_papers_loops_solution_in_fewer_iterations() {
     let mesh_40 = ["mesh.nx=40", "mesh.ny=10", "mesh.nz=10"];
