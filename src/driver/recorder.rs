@@ -172,7 +172,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             )
         } else if self.params.contact_sweeps == 0 && step.predicted_iterates > 0 {
             format!(
-                "the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1` runs it from the start)",
+                "the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1`, the default, predicts them from the start)",
                 step.predicted_iterates
             )
         } else {
