@@ -117,11 +117,20 @@ pub fn divergence_coupling_column(t: &Simplex, _b: usize) -> [f64; 12] {
 
 /// ∇v of the P1 field with nodal values `v[a]` on T: entry \[i\]\[j\] is ∂_j v_i (constant on T).
 pub fn gradient_of(t: &Simplex, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
-    let d = t.dim;
+    match t.dim {
+        2 => gradient_in::<2>(t, v),
+        _ => gradient_in::<3>(t, v),
+    }
+}
+
+/// [`gradient_of`] in D dimensions (loops the compiler unrolls: the per-cell kernels of a
+/// process that keeps no stiffness matrix run once a cell per step).
+#[inline(always)]
+fn gradient_in<const D: usize>(t: &Simplex, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
     let mut grad = [[0.0; 3]; 3];
-    for (a, va) in v.iter().enumerate().take(d + 1) {
-        for i in 0..d {
-            for j in 0..d {
+    for (a, va) in v.iter().enumerate().take(D + 1) {
+        for i in 0..D {
+            for j in 0..D {
                 grad[i][j] += va[i] * t.grads[a][j];
             }
         }
@@ -129,17 +138,13 @@ pub fn gradient_of(t: &Simplex, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
     grad
 }
 
-/// 𝒯ε(v) = λ tr ε(v) I + 2μ ε(v) of the P1 field with nodal values `v[a]`, constant on T.
-fn isotropic_stress(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 3] {
-    stress_of_gradient(t.dim, law, &gradient_of(t, v))
-}
-
-/// 𝒯ε = λ tr ε I + 2μ ε for the gradient `grad` (ε its symmetric part), in d dimensions.
-fn stress_of_gradient(d: usize, law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let trace: f64 = (0..d).map(|i| grad[i][i]).sum();
+/// 𝒯ε = λ tr ε I + 2μ ε for the gradient `grad` (ε its symmetric part), in D dimensions.
+#[inline(always)]
+fn stress_in<const D: usize>(law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let trace: f64 = (0..D).map(|i| grad[i][i]).sum();
     let mut stress = [[0.0; 3]; 3];
-    for i in 0..d {
-        for j in 0..d {
+    for i in 0..D {
+        for j in 0..D {
             stress[i][j] = 0.5 * law.two_mu * (grad[i][j] + grad[j][i]);
         }
         stress[i][i] += law.lambda * trace;
@@ -151,12 +156,20 @@ fn stress_of_gradient(d: usize, law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 
 /// values `v[a]` ([`isotropic_stiffness_columns`] times v, without the 12 × 12 matrix): the
 /// matrix-free product of a process that keeps no stiffness matrix (`crate::model::ColumnShare`).
 pub fn isotropic_stiffness_product(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 4] {
-    let d = t.dim;
-    let stress = isotropic_stress(t, law, v);
+    match t.dim {
+        2 => stiffness_product_in::<2>(t, law, v),
+        _ => stiffness_product_in::<3>(t, law, v),
+    }
+}
+
+/// [`isotropic_stiffness_product`] in D dimensions.
+#[inline(always)]
+fn stiffness_product_in<const D: usize>(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 4] {
+    let stress = stress_in::<D>(law, &gradient_in::<D>(t, v));
     let mut out = [[0.0; 3]; 4];
-    for (a, row) in out.iter_mut().enumerate().take(d + 1) {
-        for (i, value) in row.iter_mut().enumerate().take(d) {
-            *value = t.measure * (0..d).map(|j| stress[i][j] * t.grads[a][j]).sum::<f64>();
+    for (a, row) in out.iter_mut().enumerate().take(D + 1) {
+        for (i, value) in row.iter_mut().enumerate().take(D) {
+            *value = t.measure * (0..D).map(|j| stress[i][j] * t.grads[a][j]).sum::<f64>();
         }
     }
     out
@@ -172,10 +185,19 @@ pub fn isotropic_energy(t: &Simplex, law: Isotropic, x: &[[f64; 3]; 4], y: &[[f6
 /// 𝒯ε(x) : ε(y) for the gradients ∇x, ∇y ([`gradient_of`]) in d dimensions: the integrand of
 /// ∫_T 𝒯ε(x) : ε(y) = xᵀ K_T y, for a caller that takes each field's gradient once for several forms.
 pub fn isotropic_energy_density(d: usize, law: Isotropic, grad_x: &[[f64; 3]; 3], grad_y: &[[f64; 3]; 3]) -> f64 {
-    let stress = stress_of_gradient(d, law, grad_x);
+    match d {
+        2 => energy_density_in::<2>(law, grad_x, grad_y),
+        _ => energy_density_in::<3>(law, grad_x, grad_y),
+    }
+}
+
+/// [`isotropic_energy_density`] in D dimensions.
+#[inline(always)]
+fn energy_density_in<const D: usize>(law: Isotropic, grad_x: &[[f64; 3]; 3], grad_y: &[[f64; 3]; 3]) -> f64 {
+    let stress = stress_in::<D>(law, grad_x);
     let mut sum = 0.0;
-    for i in 0..d {
-        for j in 0..d {
+    for i in 0..D {
+        for j in 0..D {
             sum += stress[i][j] * 0.5 * (grad_y[i][j] + grad_y[j][i]);
         }
     }

@@ -27,24 +27,34 @@ impl Simplex {
     /// ```
     pub fn new(dim: usize, vertices: &[[f64; 3]]) -> Self {
         debug_assert_eq!(vertices.len(), dim + 1);
+        match dim {
+            2 => Self::new_in::<2>(vertices),
+            _ => Self::new_in::<3>(vertices),
+        }
+    }
+
+    /// [`Simplex::new`] in D dimensions (loops the compiler unrolls: the kernels of a process
+    /// that keeps no stiffness matrix build each cell's simplex once a step).
+    #[inline(always)]
+    fn new_in<const D: usize>(vertices: &[[f64; 3]]) -> Self {
         let mut jac = [[0.0; 3]; 3]; // jac[r][c] = (x_{c+1} − x₀)_r
-        for c in 0..dim {
-            for (r, row) in jac.iter_mut().enumerate().take(dim) {
+        for c in 0..D {
+            for (r, row) in jac.iter_mut().enumerate().take(D) {
                 row[c] = vertices[c + 1][r] - vertices[0][r];
             }
         }
-        let (det, inv) = invert(dim, &jac);
-        let factorial = if dim == 2 { 2.0 } else { 6.0 };
+        let (det, inv) = invert(D, &jac);
+        let factorial = if D == 2 { 2.0 } else { 6.0 };
         let mut grads = [[0.0; 3]; 4];
-        for k in 0..dim {
+        for k in 0..D {
             // ∇λ_{k+1} is row k of J⁻¹.
-            grads[k + 1][..dim].copy_from_slice(&inv[k][..dim]);
-            for r in 0..dim {
+            grads[k + 1][..D].copy_from_slice(&inv[k][..D]);
+            for r in 0..D {
                 grads[0][r] -= inv[k][r];
             }
         }
         Simplex {
-            dim,
+            dim: D,
             measure: det.abs() / factorial,
             grads,
         }
@@ -57,6 +67,7 @@ impl Simplex {
 }
 
 /// Determinant and inverse of the leading `dim × dim` block.
+#[inline(always)]
 fn invert(dim: usize, m: &[[f64; 3]; 3]) -> (f64, [[f64; 3]; 3]) {
     let mut inv = [[0.0; 3]; 3];
     if dim == 2 {

@@ -259,9 +259,18 @@ fn cell_simplex(mesh: &Mesh, e: usize) -> (Simplex, &[usize]) {
 
 /// The nodal values at `nodes` of a full nodal vector field with d components a node.
 fn nodal(d: usize, nodes: &[usize], v: &[f64]) -> [[f64; 3]; 4] {
+    match d {
+        2 => nodal_in::<2>(nodes, v),
+        _ => nodal_in::<3>(nodes, v),
+    }
+}
+
+/// [`nodal`] in D dimensions.
+#[inline(always)]
+fn nodal_in<const D: usize>(nodes: &[usize], v: &[f64]) -> [[f64; 3]; 4] {
     let mut out = [[0.0; 3]; 4];
-    for (a, &p) in nodes.iter().enumerate() {
-        out[a][..d].copy_from_slice(&v[p * d..(p + 1) * d]);
+    for (a, &p) in nodes.iter().enumerate().take(D + 1) {
+        out[a][..D].copy_from_slice(&v[p * D..(p + 1) * D]);
     }
     out
 }
