@@ -537,7 +537,7 @@ fn a_step_a_way_out_finished_is_logged() {
     assert!(output.status.success(), "{stderr}");
     assert!(
         stderr.contains(
-            "step 2 (t = 0.03125): the convexification loop did not converge in 100 iterates; the loop with predicted bounds finished the step"
+            "step 2 (t = 0.03125): the convexification loop did not converge in 100 iterates; the loop with the law's predicted bounds finished the step ("
         ),
         "{stderr}"
     );

@@ -137,6 +137,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             nonmonotone_newton_iterations: info.nonmonotone_newton_iterations,
             anderson_combinations: info.anderson_combinations,
             predicted_iterates: info.predicted_iterates,
+            way_out_iterates: info.way_out_iterates,
             backtracked_newton_iterations: info.backtracked_newton_iterations,
             heat_residual: info.energy.relative_heat_residual(),
         };
@@ -162,18 +163,22 @@ impl<'a, 'p> Recorder<'a, 'p> {
     }
 
     /// The log line of a step whose convexification loop failed and a way out of the iterative
-    /// path finished it ([`crate::step`]'s Newton–Krylov solver: the loop with predicted
-    /// bounds, then Newton on the nonmonotone law); none where the loop converged.
+    /// path finished it ([`crate::step`]'s Newton–Krylov solver: the loop with the law's
+    /// predicted bounds, then Newton on the nonmonotone law); none where the loop converged.
     pub fn way_out(&self, step: &StepRecord) -> Option<String> {
         let finished = if step.nonmonotone_newton_iterations > 0 {
             format!(
                 "Newton on the nonmonotone law finished the step ({} iterations)",
                 step.nonmonotone_newton_iterations
             )
-        } else if self.params.contact_sweeps == 0 && step.predicted_iterates > 0 {
+        } else if step.way_out_iterates > 0 {
+            let hint = match self.params.contact_sweeps {
+                0 => "; `solver.contact_sweeps = 1`, the default, predicts them from the start",
+                _ => "",
+            };
             format!(
-                "the loop with predicted bounds finished the step ({} predicted iterates; `solver.contact_sweeps = 1`, the default, predicts them from the start)",
-                step.predicted_iterates
+                "the loop with the law's predicted bounds finished the step ({} iterates{hint})",
+                step.way_out_iterates
             )
         } else {
             return None;

@@ -445,6 +445,10 @@ pub struct StepRecord {
     /// ([`StepInfo::predicted_iterates`]).
     #[serde(default)]
     pub predicted_iterates: usize,
+    /// Iterates of the iterative path's first way out, where the step's loop failed
+    /// ([`StepInfo::way_out_iterates`]).
+    #[serde(default)]
+    pub way_out_iterates: usize,
     /// Newton iterations cut back along their step
     /// ([`StepInfo::backtracked_newton_iterations`]).
     #[serde(default)]

@@ -560,6 +560,10 @@ pub struct StepInfo {
     /// Γ_C predicted (`solver.contact_sweeps`, or the way out of a failed paper's loop, whose
     /// step's `convexification_iterations` then count both loops').
     pub predicted_iterates: usize,
+    /// Iterates of the iterative path's first way out, the loop with the law's sweeps from the
+    /// step's start where the step's own loop failed (0 where it converged; the step's
+    /// `convexification_iterations` count both loops').
+    pub way_out_iterates: usize,
     /// Newton iterations of the iterative path's convex problems whose step was cut back
     /// because the full step raised the law's residual (`newton_krylov`'s backtracking).
     pub backtracked_newton_iterations: usize,
@@ -589,6 +593,7 @@ impl StepInfo {
         self.nonmonotone_newton_iterations += other.nonmonotone_newton_iterations;
         self.anderson_combinations += other.anderson_combinations;
         self.predicted_iterates += other.predicted_iterates;
+        self.way_out_iterates += other.way_out_iterates;
         self.backtracked_newton_iterations += other.backtracked_newton_iterations;
         self.substeps += other.substeps;
         self.cutback_depth = self.cutback_depth.max(other.cutback_depth);

@@ -1125,6 +1125,7 @@ impl SemismoothNewton<'_, '_> {
         // The step's iterates count both loops'.
         let failed = info.convexification_iterations;
         let outcome = convexify(self, iterate, params, info);
+        info.way_out_iterates = info.convexification_iterations;
         info.convexification_iterations += failed;
         self.sweeps = 0;
         match outcome {
