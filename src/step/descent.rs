@@ -69,6 +69,12 @@ pub struct DescentParams {
     pub handover: f64,
     /// The Newton method of the hand-over.
     pub newton: NewtonParams,
+    /// With frozen bounds and `lagged` = s > 0: symmetric sweeps (Γ_C's order and back), the
+    /// bounds frozen again at the slip after every s of them: the convexification loop itself
+    /// run on Γ_C's exact condensed rows, each convex problem solved by s sweeps, which stops at
+    /// one of its fixed points ([`super::fast`]). 0, or without frozen bounds: forward sweeps
+    /// with the bounds given.
+    pub lagged: usize,
 }
 
 /// K = D⁻¹ on Γ_C and what a sweep needs of it, computed once per step size.
@@ -212,10 +218,19 @@ pub fn descend(
     let n_nodes = stiffness.weights.len();
     let laws = step.laws;
     let mut w = start.w;
+    let bound_at = |w: &[f64], i: usize| laws.bound(i, norm(&w[i * t..(i + 1) * t]));
+    // Lagged bounds are frozen again after every sweep (`DescentParams::lagged`).
+    let given = frozen;
+    let mut lagged = given.filter(|_| params.lagged > 0).map(<[f64]>::to_vec);
+    // The backward pass of a lagged sweep (none otherwise).
+    let back = if lagged.is_some() { n_nodes } else { 0 };
+    fn frozen_at<'b>(lagged: &'b Option<Vec<f64>>, frozen: Option<&'b [f64]>) -> Option<&'b [f64]> {
+        lagged.as_deref().or(frozen)
+    }
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
-    let g_min = |w: &[f64]| match frozen {
+    let g_min = |w: &[f64], frozen: Option<&[f64]>| match frozen {
         Some(g) => law_scale(g.iter().copied()),
-        None => law_scale((0..n_nodes).map(|i| laws.bound(i, norm(&w[i * t..(i + 1) * t])))),
+        None => law_scale((0..n_nodes).map(|i| bound_at(w, i))),
     };
     let mut w0 = vec![0.0; n_t];
     let mut y = vec![0.0; n_t];
@@ -233,7 +248,8 @@ pub fn descend(
     let mut newton_tried_at = f64::INFINITY;
     let mut residual = f64::INFINITY;
     for sweep in 1..=params.max_sweeps {
-        for i in 0..n_nodes {
+        let frozen = frozen_at(&lagged, given);
+        for i in (0..n_nodes).chain((0..back).rev()) {
             let range = i * t..(i + 1) * t;
             let kappa = stiffness.kappa[i];
             let mut v = [0.0; 2];
@@ -272,7 +288,11 @@ pub fn descend(
             }
         };
         xi_of(&y, &mut xi);
-        if frozen.is_none() && step.law_residual(&w, &xi, frozen) / g_min(&w) <= params.tolerance {
+        if let Some(bounds) = lagged.as_mut().filter(|_| sweep % params.lagged == 0) {
+            bounds.iter_mut().enumerate().for_each(|(i, g)| *g = bound_at(&w, i));
+        }
+        let frozen = frozen_at(&lagged, given);
+        if frozen.is_none() && step.law_residual(&w, &xi, frozen) / g_min(&w, frozen) <= params.tolerance {
             // Converged on the updated gradient: confirm on a fresh one (no drift of the
             // updates), and carry it on if not. (A convex subproblem's result is an iterate of
             // the convexification loop, which confirms only the state it accepts:
@@ -282,7 +302,7 @@ pub fn descend(
             xi_of(&y, &mut xi);
         }
         let previous = residual;
-        residual = step.law_residual(&w, &xi, frozen) / g_min(&w);
+        residual = step.law_residual(&w, &xi, frozen) / g_min(&w, frozen);
         if residual <= params.tolerance {
             return Ok(NewtonResult {
                 w,
@@ -297,7 +317,7 @@ pub fn descend(
             newton_tried_at = residual;
             if let Some(result) = step.solve(w_free, w.clone(), xi.clone(), None, params.newton) {
                 *newton_iterations += result.iterations;
-                let law_residual = step.law_residual(&result.w, &result.xi, None) / g_min(&result.w);
+                let law_residual = step.law_residual(&result.w, &result.xi, None) / g_min(&result.w, None);
                 if law_residual <= params.tolerance {
                     return Ok(NewtonResult {
                         iterations: sweep,

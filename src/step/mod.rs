@@ -502,6 +502,16 @@ pub struct SolverParams {
 }
 
 impl SolverParams {
+    /// Sweeps per bound update of the loop on Γ_C's rows ([`Prediction::Loop`]), 0 where the
+    /// paper's loop runs (`contact_sweeps` = 0, or the law's sweeps, which the direct path
+    /// does not have).
+    pub fn loop_on_rows_sweeps(&self) -> usize {
+        match self.prediction {
+            Prediction::Loop => self.contact_sweeps,
+            Prediction::Law => 0,
+        }
+    }
+
     /// The linear path `problem` takes with these settings on this machine, and why
     /// ([`LinearKind::choose`] with the machine's memory): what the set-up follows and the run's
     /// header reports.

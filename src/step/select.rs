@@ -109,7 +109,7 @@ impl<'a> StepSolver<'a> {
                     tolerance: params.inner_tolerance,
                     max_iterations: 8,
                 },
-                params.max_sweeps,
+                (params.max_sweeps, params.loop_on_rows_sweeps()),
             )),
         })
     }
