@@ -72,7 +72,7 @@ pub struct DescentParams {
     /// With frozen bounds and `lagged` = s > 0: symmetric sweeps (Γ_C's order and back), the
     /// bounds frozen again at the slip after every s of them: the convexification loop itself
     /// run on Γ_C's exact condensed rows, each convex problem solved by s sweeps, which stops at
-    /// one of its fixed points ([`super::fast`]). 0, or without frozen bounds: forward sweeps
+    /// one of its fixed points ([`super::FastSolver`]). 0, or without frozen bounds: forward sweeps
     /// with the bounds given.
     pub lagged: usize,
 }
