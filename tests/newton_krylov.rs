@@ -180,6 +180,16 @@ fn assert_same_solution(case: &str, (plain_summary, plain): (&Summary, &State), 
     );
 }
 
+/// The run `summary` (with `what`) took fewer Newton iterations than the run `plain` (without).
+fn assert_fewer_newton_iterations(case: &str, what: &str, plain: &Summary, summary: &Summary) {
+    assert!(
+        summary.newton_iterations < plain.newton_iterations,
+        "{case}: {} Newton iterations with {what}, {} without",
+        summary.newton_iterations,
+        plain.newton_iterations
+    );
+}
+
 /// u, w, θ and ξ of `b` within `tolerance` of `a`'s, relative to a's largest entry.
 fn assert_fields_agree(a: &State, b: &State, tolerance: f64, case: &str) {
     let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |s, x| s.max(x.abs()));
@@ -425,12 +435,7 @@ fn outer_iterations_stay_bounded_where_the_slip_zone_converges() {
         let case = format!("nx = {nx}, k = 1/{inverse_k}");
         assert_eq!(plain_summary.anderson_combinations, 0, "{case}");
         assert!(summary.anderson_combinations > 0, "{case}");
-        assert!(
-            summary.newton_iterations < plain_summary.newton_iterations,
-            "{case}: {} Newton iterations with Anderson, {} without",
-            summary.newton_iterations,
-            plain_summary.newton_iterations
-        );
+        assert_fewer_newton_iterations(&case, "Anderson", &plain_summary, &summary);
         assert_same_solution(&case, (&plain_summary, &plain), (&summary, &accelerated));
         for a in &plain_summary.outputs {
             assert!(a.slip_nodes > 0, "{case}: the zone should slip at t = {}", a.t);
@@ -578,12 +583,7 @@ fn the_loop_on_the_contact_rows_reaches_the_papers_loops_solution_in_fewer_itera
         let (summary, rows) = run(Some(PAPER3D), &sets, "iterative");
         assert_eq!(plain_summary.predicted_iterates, 0, "{case}");
         assert!(summary.predicted_iterates > 0, "{case}");
-        assert!(
-            summary.newton_iterations < plain_summary.newton_iterations,
-            "{case}: {} Newton iterations with the loop on the rows, {} without",
-            summary.newton_iterations,
-            plain_summary.newton_iterations
-        );
+        assert_fewer_newton_iterations(case, "the loop on the rows", &plain_summary, &summary);
         assert!(
             plain_summary.cutbacks.is_empty() && summary.cutbacks.is_empty(),
             "{case}"
