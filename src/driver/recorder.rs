@@ -9,7 +9,7 @@ use super::summary::{
 use super::watch::{RunWarning, Watch};
 use super::OutputPlan;
 use crate::model::{LawConstants, Problem, State, StepEnergy};
-use crate::step::{LinearKind, PreconditionerKind, SolverKind, SolverParams, StepInfo, StepSolver};
+use crate::step::{LinearKind, PreconditionerKind, Prediction, SolverKind, SolverParams, StepInfo, StepSolver};
 use crate::time::Levels;
 
 /// The fixed part of a run's report: the linear path as set up.
@@ -276,7 +276,53 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 .to_string(),
         });
         lines.push(self.linear_line());
+        lines.extend(self.loop_line());
         lines
+    }
+
+    /// How the fast solver's convexification loop runs (the paper's solver has its own):
+    /// `convexification loop: …`.
+    fn loop_line(&self) -> Option<String> {
+        let params = &self.params;
+        if params.kind != SolverKind::Fast {
+            return None;
+        }
+        let sweeps = |n: usize| {
+            if n == 1 {
+                "1 sweep".to_string()
+            } else {
+                format!("{n} sweeps")
+            }
+        };
+        let layers = params.krylov.condensed_layers;
+        let through = match (self.report.linear, layers) {
+            (LinearKind::Direct, _) => " of the exact condensed rows".to_string(),
+            (_, 0) => ", the body held".to_string(),
+            (_, 1) => " through 1 layer of the body".to_string(),
+            (_, l) => format!(" through {l} layers of the body"),
+        };
+        let line = match (params.contact_sweeps, params.prediction) {
+            (0, _) => "the paper's, one convex problem per iterate (solver.contact_sweeps = 0)".to_string(),
+            (_, Prediction::Law) if self.report.linear == LinearKind::Direct => {
+                "the paper's, one convex problem per iterate (solver.prediction = \"law\" is the iterative path's)"
+                    .to_string()
+            }
+            (n, Prediction::Loop) => {
+                let every = if n == 1 {
+                    "every sweep".to_string()
+                } else {
+                    format!("every {n} sweeps")
+                };
+                format!(
+                    "run on Γ_C's rows from its second iterate, the bounds updated after {every}{through} (solver.prediction = \"loop\")"
+                )
+            }
+            (n, Prediction::Law) => format!(
+                "bounds predicted by {} of the law over Γ_C{through} (solver.prediction = \"law\")",
+                sweeps(n)
+            ),
+        };
+        Some(format!("convexification loop: {line}"))
     }
 
     /// The linear path taken and why ([`SolverParams::linear_choice`]): `linear path: direct
