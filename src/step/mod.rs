@@ -269,31 +269,38 @@ impl LinearKind {
     pub const AUTO_OUTER_PER_STEP: f64 = 10.0;
 
     /// Seconds per entry of the direct factor to factor it (and assemble, condense): the
-    /// set-up of the direct path.
-    pub const AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY: f64 = 2.5e-7;
+    /// set-up of the direct path (measured 2.1–5.1·10⁻⁸ on the bodies of [`LinearKind::choose`]).
+    pub const AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY: f64 = 3.5e-8;
+
+    /// Seconds per step per entry of the direct factor: each step's sparse solves with it
+    /// (measured 8.3·10⁻¹⁰–1.0·10⁻⁹).
+    pub const AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY_STEP: f64 = 9e-10;
 
     /// Seconds per outer iteration per entry of the dense compliance on Γ_C (n_t², n_t = (d − 1)
-    /// × contact nodes): the direct path's nonsmooth iterations are dense products with C.
-    pub const AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY: f64 = 1e-8;
+    /// × contact nodes): the direct path's nonsmooth iterations are dense products with C
+    /// (measured 4.8·10⁻¹⁰–9.8·10⁻¹⁰, 1.7·10⁻⁹ on the strip 512 × 4).
+    pub const AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY: f64 = 7e-10;
 
     /// Seconds per step per n_t³ in 2D, where the direct path's fast solver starts each step
     /// with Newton on the condensed law: a dense n_t × n_t LU per iteration, up to 8 (measured
-    /// on the strip 2048 × 4: 8 per step, 27.6 s per step; in 3D the descent's sweeps take
+    /// on the strip 2048 × 4: 8 per step, 1.4 s per step; in 3D the descent's sweeps take
     /// their place, and α n_t² covers them).
-    pub const AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D: f64 = 3.2e-9;
+    pub const AUTO_DIRECT_SECONDS_PER_NEWTON_CUBE_2D: f64 = 1.6e-10;
 
     /// Seconds per outer iteration per unknown of the iterative path (its Newton iterations'
-    /// GMRES + ILU(0) solves; its set-up is a tenth of the direct path's and left out).
-    pub const AUTO_ITERATIVE_SECONDS_PER_UNKNOWN: f64 = 2e-6;
+    /// GMRES + ILU(0) solves; its set-up is a twentieth of the direct path's and left out;
+    /// measured 0.96–1.9·10⁻⁷ in 3D, 0.35–5.3·10⁻⁷ in 2D).
+    pub const AUTO_ITERATIVE_SECONDS_PER_UNKNOWN: f64 = 1.2e-7;
 
     /// An estimated direct run shorter than this takes the direct path whatever the iterative
-    /// one's estimate: the saving would be a few seconds at most, the model leaves out the
-    /// set-up and per-step overheads that dominate small runs, and the direct path is the
-    /// robust one and the reference (it reports the uniqueness condition). The iterative path's
-    /// ILU(0) may stall on a stiff body of several materials: the 3D brake (steel backplate and
-    /// lining, 6 978 unknowns, 384 contact nodes) in 3 steps is estimated 1.5 s direct against
-    /// 0.4 s iterative, and there GMRES reaches its cap at a relative residual of 2e-9.
-    pub const AUTO_DIRECT_ANYWAY_SECONDS: f64 = 5.0;
+    /// one's estimate: the saving would be about a second at most (the 3D example, 64 steps:
+    /// 1.76 s direct against 1.16 s, estimated 1.9 s and 1.4 s), the model leaves out the
+    /// per-step overheads that dominate small runs, and the direct path is the robust one and
+    /// the reference (it reports the uniqueness condition, and it is the path verified against
+    /// GetFEM to 10⁻¹⁰). The iterative path's ILU(0) may stall on a stiff body of several
+    /// materials: the 3D brake (steel backplate and lining, 6 978 unknowns, 384 contact nodes)
+    /// reaches GMRES's cap at a relative residual of 2e-9.
+    pub const AUTO_DIRECT_ANYWAY_SECONDS: f64 = 2.0;
 
     /// The estimated cost of a whole run of `size` on each path, in seconds of this machine
     /// (the constants `AUTO_*` of [`LinearKind`]; the measurements in [`LinearKind::choose`]).
@@ -305,7 +312,7 @@ impl LinearKind {
     /// F         = F_sparse(d, N) + (d n_c)² / 2          the factor's entries: the sparse fill
     ///                                                   (crate::resources) and the dense block of
     ///                                                   the contact unknowns, ordered last
-    /// direct    = φ F + S I α n_t² + [d = 2] S ν n_t³
+    /// direct    = φ F + S σ F + S I α n_t² + [d = 2] S ν n_t³
     /// iterative = S I β N
     /// ```
     pub fn costs(size: &ProblemSize) -> PathCosts {
@@ -323,6 +330,7 @@ impl LinearKind {
         PathCosts {
             factor_entries: factor,
             direct: Self::AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY * factor
+                + size.steps as f64 * Self::AUTO_DIRECT_SECONDS_PER_FACTOR_ENTRY_STEP * factor
                 + outer * Self::AUTO_DIRECT_SECONDS_PER_COMPLIANCE_ENTRY * n_t * n_t
                 + size.steps as f64 * newton,
             iterative: outer * Self::AUTO_ITERATIVE_SECONDS_PER_UNKNOWN * n,
@@ -339,40 +347,38 @@ impl LinearKind {
     ///
     /// 1. in 3D, its estimated peak memory ([`crate::resources::estimated_memory`]) is at most
     ///    [`Self::AUTO_DIRECT_MEMORY_SHARE`] of the machine's;
-    /// 2. in 3D, the problem has at most [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns: on the 3D
-    ///    example, 64 steps, whole runs direct against iterative: 17.6k unknowns 2.1 s against
-    ///    3.5 s, 47k 10.6 s against 12.4 s, 98k 33.8 s against 30.4 s (and 2.3 GiB against 0.45
-    ///    GiB); the factor's fill grows like N^{4/3}, the iterative path's cost like N;
+    /// 2. in 3D, the problem has at most [`Self::AUTO_DIRECT_UNKNOWNS_3D`] unknowns: the factor's
+    ///    fill grows like N^{4/3}, the iterative path's cost like N (98k unknowns, 64 steps,
+    ///    2026-11-27: 33.8 s direct against 30.4 s, 2.3 GiB against 0.45 GiB);
     /// 3. and its estimated run ([`LinearKind::costs`]) is no dearer than the iterative one's
     ///    (or shorter than [`Self::AUTO_DIRECT_ANYWAY_SECONDS`]):
     ///    the direct path's cost is also its dense condensation on Γ_C, which grows with the
-    ///    contact nodes, not the unknowns. Measured (release, 16 steps at k = 1/64, both paths
-    ///    on the same machine under a load of about 7 on 2 cores; wall seconds direct against
-    ///    iterative, and the peak memory):
+    ///    contact nodes, not the unknowns, and each step's sparse solves with its factor.
+    ///    Measured (release, 16 steps at k = 1/64, both paths one after the other on an idle
+    ///    machine, 2026-11-29, fifth session, both paths' loops on Γ_C's rows; whole-run
+    ///    seconds direct against iterative, the estimate of each, and the peak memory):
     ///
-    /// | body | d | N | n_c | direct | iterative | peak MiB |
-    /// |---|---|---|---|---|---|---|
-    /// | 3D example 40 × 10 × 10 | 3 | 17 590 | 440 | 2.9 | 4.2 | 200 / 63 |
-    /// | 3D example 56 × 14 × 14 | 3 | 46 970 | 840 | 29.4 | 16.1 | 777 / 157 |
-    /// | pad 40 × 10 × 5 (60 × 15 × 7 cells) | 3 | 27 862 | 960 | 16.0 | 9.9 | 521 / 95 |
-    /// | thin pad 40 × 13.2 × 3.3 (60 × 20 × 5) | 3 | 27 025 | 1 260 | 21.7 | 11.1 | 688 / 93 |
-    /// | thin pad 40 × 10 × 2 (40 × 10 × 2) | 3 | 4 222 | 440 | 1.40 | 1.39 | 85 / 21 |
-    /// | 2D example 128 × 32 | 2 | 12 384 | 128 | 0.82 | 0.64 | 40 / 24 |
-    /// | 2D example 256 × 64 | 2 | 49 344 | 256 | 6.1 | 28.5 | 139 / 78 |
-    /// | strip 40 × 2.5 (512 × 4) | 2 | 6 652 | 512 | 2.5 | 2.2 | 72 / 17 |
-    /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 477 | 85 | 910 / 51 |
+    /// | body | d | N | n_c | direct | iterative | estimated | peak MiB |
+    /// |---|---|---|---|---|---|---|---|
+    /// | 3D example 40 × 10 × 10 | 3 | 17 590 | 440 | 0.70 | 0.34 | 0.93 / 0.34 | 199 / 53 |
+    /// | 3D example 56 × 14 × 14 | 3 | 46 970 | 840 | 3.41 | 0.72 | 3.5 / 0.90 | 737 / 125 |
+    /// | pad 40 × 10 × 5 (60 × 15 × 7 cells) | 3 | 27 862 | 960 | 2.22 | 0.53 | 2.1 / 0.53 | 505 / 81 |
+    /// | thin pad 40 × 13.2 × 3.3 (60 × 20 × 5) | 3 | 27 025 | 1 260 | 3.34 | 0.59 | 2.5 / 0.52 | 678 / 81 |
+    /// | thin pad 40 × 10 × 2 (40 × 10 × 2) | 3 | 4 222 | 440 | 0.20 | 0.13 | 0.25 / 0.08 | 82 / 21 |
+    /// | 2D example 128 × 32 | 2 | 12 384 | 128 | 0.06 | 0.07 | 0.08 / 0.24 | 39 / 22 |
+    /// | 2D example 256 × 64 | 2 | 49 344 | 256 | 0.29 | 0.42 | 0.37 / 0.95 | 126 / 68 |
+    /// | strip 40 × 2.5 (512 × 4) | 2 | 6 652 | 512 | 0.22 | 0.18 | 0.43 / 0.13 | 71 / 19 |
+    /// | strip 40 × 1 (2048 × 4) | 2 | 26 620 | 2 048 | 27.0 | 2.26 | 26 / 0.51 | |
     ///
-    /// (Measured again on 2026-11-28 with the x86-64-v3 build on an idle machine, every run
-    /// 4–45× faster: the rule takes the faster path on every body but the 3D example at 17.6k,
-    /// 0.69 s direct against 0.49 s, and the constants estimate 6–28× today's seconds;
-    /// docs/solvers.md.)
-    /// φ, α, ν, β are fitted to these runs (per outer iteration: α n_t² 6–12 ms on the 3D
-    /// bodies, β N 1.2–2.2 µs per unknown). The load slows the iterative path (memory-bound)
-    /// more than the direct one (at 47k, 0.63 s per step here against 0.04–0.06 s on the idle
-    /// machine of `bench --3d`), so on an idle machine the rule leans to the direct path where
-    /// the two are close (the 3D example at 47k and 64 steps: direct; the strip 512 × 4, a tie
-    /// in the table, goes iterative by its Newton term). The paper's solver takes the direct
-    /// path wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa
+    /// φ, σ, α, ν, β are fitted to these runs (the direct runs' set-up, solves and contact
+    /// solver from `summary.json`'s timings). The constants before these (fitted on 2026-11-27
+    /// under a load of about 7 on 2 cores, where the memory-bound iterative path slowed most,
+    /// and before either path's loop ran on Γ_C's rows) estimated 4–30× today's seconds and
+    /// sent the 3D example at 47k unknowns over 64 steps to the direct path: 7.9 s against
+    /// about 2.5 s on the iterative one. Where the estimated direct run is under
+    /// [`Self::AUTO_DIRECT_ANYWAY_SECONDS`] it is taken anyway (the 3D example at 17.6k
+    /// unknowns, the brake pads, the 2D examples). The paper's solver takes the direct path
+    /// wherever its factor fits: on the iterative path it pays a Krylov solve per Uzawa
     /// iterate ([`PaperKrylov`]).
     /// `size.contact_nodes = 0` (not known yet: the scenario's memory check before the mesh)
     /// leaves the unknowns to decide, as before the cost model.
