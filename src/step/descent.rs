@@ -219,7 +219,7 @@ pub fn descend(
     let laws = step.laws;
     let mut w = start.w;
     let bound_at = |w: &[f64], i: usize| laws.bound(i, norm(&w[i * t..(i + 1) * t]));
-    // Lagged bounds are frozen again after every sweep (`DescentParams::lagged`).
+    // Lagged bounds are frozen again after every `params.lagged` sweeps (`DescentParams::lagged`).
     let given = frozen;
     let mut lagged = given.filter(|_| params.lagged > 0).map(<[f64]>::to_vec);
     // The backward pass of a lagged sweep (none otherwise).
