@@ -589,6 +589,9 @@ fn the_loop_on_the_contact_rows_reaches_the_papers_loops_solution_in_fewer_itera
         let (summary, rows) = run(Some(PAPER3D), &sets, "iterative");
         assert_eq!(plain_summary.predicted_iterates, 0, "{case}");
         assert!(summary.predicted_iterates > 0, "{case}");
+        // Each predicted iterate's sweeps over the rows count as inner iterations.
+        assert_eq!(plain_summary.inner_iterations, 0, "{case}");
+        assert!(summary.inner_iterations >= summary.predicted_iterates, "{case}");
         assert_fewer_newton_iterations(case, "the loop on the rows", &plain_summary, &summary);
         assert!(
             plain_summary.cutbacks.is_empty() && summary.cutbacks.is_empty(),

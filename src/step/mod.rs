@@ -553,8 +553,9 @@ impl Default for SolverParams {
 pub struct StepInfo {
     /// Outer (convexification) iterations.
     pub convexification_iterations: usize,
-    /// Inner iterations summed over the outer ones: the paper's Uzawa iterations, or the
-    /// descent sweeps of the fast solver's convex subproblems in 3D.
+    /// Inner iterations summed over the outer ones: the paper's Uzawa iterations, the descent
+    /// sweeps of the fast solver's convex subproblems on the direct path, or the iterative
+    /// path's symmetric sweeps over Γ_C's rows that predict its iterates' bounds.
     pub inner_iterations: usize,
     /// Last relative increments of u, θ, ξ, ζ: the left sides of (77)–(80) over the right
     /// sides' norms.

@@ -523,13 +523,13 @@ impl Linearization<'_> {
     ///
     /// The backward pass carries a slip front that moves against Γ_C's order as far in one
     /// sweep as the forward pass one that moves with it (the module header). Returns the
-    /// predicted relative slip, node-major as w.
+    /// predicted relative slip, node-major as w, and the symmetric sweeps it took.
     fn predicted_slip(
         &self,
         x: &[f64],
         w: &[f64],
         (sweeps, prediction): (usize, Prediction),
-    ) -> Result<Vec<f64>, SolveError> {
+    ) -> Result<(Vec<f64>, usize), SolveError> {
         let first = self.system.first_contact;
         // The Γ_C tangential velocities, updated node by node; every other unknown stays.
         let mut contact = x[first..].to_vec();
@@ -553,6 +553,7 @@ impl Linearization<'_> {
                 self.relax_node(i, rows, frozen.map(|bounds| bounds[i]), contact, slip);
             }
         };
+        let mut done = 0;
         match prediction {
             Prediction::Law => (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, None)),
             Prediction::Loop => {
@@ -560,6 +561,7 @@ impl Linearization<'_> {
                 let scale = bounds.iter().fold(0.0f64, |s, &b| s.max(b));
                 for _ in 0..MAX_LAGS {
                     (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, Some(&bounds)));
+                    done += sweeps;
                     let next = self.laws.bounds(&slip);
                     let moved = next.iter().zip(&bounds).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
                     bounds = next;
@@ -569,7 +571,7 @@ impl Linearization<'_> {
                 }
             }
         }
-        Ok(slip)
+        Ok((slip, if prediction == Prediction::Law { sweeps } else { done }))
     }
 
     /// Row `row` of A (from Γ_C's rows) times x.
@@ -1308,11 +1310,10 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             Some(bounds) => bounds,
             None if sweeps > 0 => {
                 info.predicted_iterates += 1;
-                let mut bounds = laws.bounds(&self.linearization.predicted_slip(
-                    &iterate.x,
-                    &iterate.w,
-                    (sweeps, self.prediction),
-                )?);
+                let (slip, sweeps) =
+                    (self.linearization).predicted_slip(&iterate.x, &iterate.w, (sweeps, self.prediction))?;
+                info.inner_iterations += sweeps;
+                let mut bounds = laws.bounds(&slip);
                 if !self.unpredicted.is_empty() {
                     let plain = laws.bounds(&iterate.w);
                     (bounds.iter_mut().zip(&plain).zip(&self.unpredicted))
