@@ -105,8 +105,8 @@ enum Command {
         #[arg(long, default_value_t = 128)]
         paper_up_to: usize,
         /// Run the hard suite instead: long runs, a coarse k, steep velocity weakening (α = 1000,
-        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 1.5 minutes, most of it the
-        /// 3D case). Prints for each case whether it completed, its cutbacks, the steps the
+        /// b = 0.05), the 3D example at 47k unknowns and k = 1/8 on both linear paths (about 20 s,
+        /// most of it the 3D cases). Prints for each case whether it completed, its cutbacks, the steps the
         /// descent (direct path) or Newton on the law (iterative path) finished and the worst nodal-law residual, and writes bench_hard.json. Run from the repository root (the 3D
         /// case reads scenarios/paper3d.toml).
         #[arg(long)]
@@ -116,7 +116,7 @@ enum Command {
         /// unknowns), --steps-3d steps of k = 1/--inverse-k each, on the iterative path and, up
         /// to --direct-up-to, on the direct one; then nx = --coarse-k-cells again at k = 1/8 on
         /// both paths. Prints set-up, time per step, Newton and Krylov iterations per step and
-        /// peak memory with their growth exponents, and writes bench_3d.json (about 1.5 minutes).
+        /// peak memory with their growth exponents, and writes bench_3d.json (about 30 s).
         #[arg(long = "3d")]
         three_d: bool,
         /// Cells along x of the 3D suite.
@@ -132,10 +132,9 @@ enum Command {
         /// (its factor grows like N^{4/3}: 12 s of set-up at 98k unknowns, no fit at 291k).
         #[arg(long, default_value_t = 72)]
         direct_up_to: usize,
-        /// nx of the 3D runs at k = 1/8 (0: none). The iterative path's convexification loop
-        /// needs 7–14× more iterations per step at k = 1/8 than at 1/64 (each a Krylov solve,
-        /// with 2.5–5× more Krylov iterations), so 156 (972k unknowns) takes about 8.5 minutes;
-        /// 56 takes about 20 s.
+        /// nx of the 3D runs at k = 1/8 (0: none). The iterative path takes about twice the
+        /// Newton iterations per step at k = 1/8 as at 1/64 (47k unknowns: 9.5 against 5.0), each
+        /// with more Krylov iterations, so 156 (972k unknowns) takes about 40 s; 56 about 1 s.
         #[arg(long, default_value_t = 56)]
         coarse_k_cells: usize,
         /// The preconditioners of the 3D suite's iterative runs, each run once per entry:
