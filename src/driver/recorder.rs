@@ -287,12 +287,10 @@ impl<'a, 'p> Recorder<'a, 'p> {
         if params.kind != SolverKind::Fast {
             return None;
         }
-        let sweeps = |n: usize| {
-            if n == 1 {
-                "1 sweep".to_string()
-            } else {
-                format!("{n} sweeps")
-            }
+        let n = params.contact_sweeps;
+        let every = match n {
+            1 => "every sweep".to_string(),
+            _ => format!("every {n} sweeps"),
         };
         let layers = params.krylov.condensed_layers;
         let through = match (self.report.linear, layers) {
@@ -301,25 +299,18 @@ impl<'a, 'p> Recorder<'a, 'p> {
             (_, 1) => " through 1 layer of the body".to_string(),
             (_, l) => format!(" through {l} layers of the body"),
         };
-        let line = match (params.contact_sweeps, params.prediction) {
+        let line = match (n, params.prediction) {
             (0, _) => "the paper's, one convex problem per iterate (solver.contact_sweeps = 0)".to_string(),
             (_, Prediction::Law) if self.report.linear == LinearKind::Direct => {
                 "the paper's, one convex problem per iterate (solver.prediction = \"law\" is the iterative path's)"
                     .to_string()
             }
-            (n, Prediction::Loop) => {
-                let every = if n == 1 {
-                    "every sweep".to_string()
-                } else {
-                    format!("every {n} sweeps")
-                };
-                format!(
-                    "run on Γ_C's rows from its second iterate, the bounds updated after {every}{through} (solver.prediction = \"loop\")"
-                )
-            }
-            (n, Prediction::Law) => format!(
-                "bounds predicted by {} of the law over Γ_C{through} (solver.prediction = \"law\")",
-                sweeps(n)
+            (_, Prediction::Loop) => format!(
+                "run on Γ_C's rows from its second iterate, the bounds updated after {every}{through} (solver.prediction = \"loop\")"
+            ),
+            (_, Prediction::Law) => format!(
+                "bounds predicted by {n} sweep{} of the law over Γ_C{through} (solver.prediction = \"law\")",
+                if n == 1 { "" } else { "s" }
             ),
         };
         Some(format!("convexification loop: {line}"))

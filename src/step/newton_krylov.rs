@@ -555,7 +555,10 @@ impl Linearization<'_> {
         };
         let mut done = 0;
         match prediction {
-            Prediction::Law => (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, None)),
+            Prediction::Law => {
+                (0..sweeps).for_each(|_| sweep(&mut contact, &mut slip, None));
+                done = sweeps;
+            }
             Prediction::Loop => {
                 let mut bounds = self.laws.bounds(&slip);
                 let scale = bounds.iter().fold(0.0f64, |s, &b| s.max(b));
@@ -571,7 +574,7 @@ impl Linearization<'_> {
                 }
             }
         }
-        Ok((slip, if prediction == Prediction::Law { sweeps } else { done }))
+        Ok((slip, done))
     }
 
     /// Row `row` of A (from Γ_C's rows) times x.
@@ -1077,11 +1080,28 @@ impl<'a> NewtonKrylov<'a> {
 
 /// An iterate of the Newton–Krylov loop: all unknowns (in the system's order), and w_τ, ξ on
 /// Γ_C.
-#[derive(Clone)]
 struct AllUnknowns {
     x: Vec<f64>,
     w: Vec<f64>,
     xi: Vec<f64>,
+}
+
+impl Clone for AllUnknowns {
+    fn clone(&self) -> Self {
+        AllUnknowns {
+            x: self.x.clone(),
+            w: self.w.clone(),
+            xi: self.xi.clone(),
+        }
+    }
+
+    /// Into the vectors already there (no allocation: the backtracking's copy of each Newton
+    /// iterate, [`SemismoothNewton::backtrack`]).
+    fn clone_from(&mut self, source: &Self) {
+        self.x.clone_from(&source.x);
+        self.w.clone_from(&source.w);
+        self.xi.clone_from(&source.xi);
+    }
 }
 
 /// The convex problems of the Newton–Krylov loop, solved by semismooth Newton iterations.
@@ -1148,7 +1168,7 @@ impl SemismoothNewton<'_, '_> {
     /// solve computes it afresh, and solved to rtol before the loop may stop on the point.
     fn backtrack(
         &mut self,
-        (start_law, start): (f64, AllUnknowns),
+        (start_law, start): (f64, &AllUnknowns),
         iterate: &mut AllUnknowns,
         frozen: &[f64],
         info: &mut StepInfo,
@@ -1329,10 +1349,18 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         self.inner_converged = false;
         let forcing = solver.system.forcing;
         // The law's residual at the last Newton iterate of this convex problem (none before
-        // its first), and that iterate, kept to backtrack to.
+        // its first), and that iterate, kept to backtrack to (its vectors reused from one
+        // Newton iteration to the next).
         let mut last_law = None;
+        let mut saved: Option<AllUnknowns> = None;
         for _ in 0..MAX_NEWTON_PER_CONVEX_PROBLEM {
-            let start = (last_law.filter(|_| solver.backtracking)).map(|law| (law, iterate.clone()));
+            let start_law = last_law.filter(|_| solver.backtracking);
+            if start_law.is_some() {
+                match saved.as_mut() {
+                    Some(saved) => saved.clone_from(iterate),
+                    None => saved = Some(iterate.clone()),
+                }
+            }
             let krylov_before = info.krylov_iterations;
             let AllUnknowns { x, w, xi } = &mut *iterate;
             (*w, *xi) = self
@@ -1342,7 +1370,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
             // and the lagged heat), so the convex problem is solved where its law holds: no
             // second solve to see the update vanish.
             let mut law = solver.law_residual(&iterate.w, &iterate.xi, &frozen);
-            if let Some((start_law, start)) = start.filter(|&(start_law, _)| law > start_law) {
+            if let (Some(start_law), Some(start)) = (start_law.filter(|&start_law| law > start_law), &saved) {
                 law = self
                     .backtrack((start_law, start), iterate, &frozen, info)
                     .unwrap_or(law);
