@@ -224,9 +224,6 @@ pub fn descend(
     let mut lagged = given.filter(|_| params.lagged > 0).map(<[f64]>::to_vec);
     // The backward pass of a lagged sweep (none otherwise).
     let back = if lagged.is_some() { n_nodes } else { 0 };
-    fn frozen_at<'b>(lagged: &'b Option<Vec<f64>>, frozen: Option<&'b [f64]>) -> Option<&'b [f64]> {
-        lagged.as_deref().or(frozen)
-    }
     // The residual's scale: the smallest friction bound at the iterate (as the other solvers').
     let g_min = |w: &[f64], frozen: Option<&[f64]>| match frozen {
         Some(g) => law_scale(g.iter().copied()),
@@ -248,7 +245,7 @@ pub fn descend(
     let mut newton_tried_at = f64::INFINITY;
     let mut residual = f64::INFINITY;
     for sweep in 1..=params.max_sweeps {
-        let frozen = frozen_at(&lagged, given);
+        let frozen = lagged.as_deref().or(given);
         for i in (0..n_nodes).chain((0..back).rev()) {
             let range = i * t..(i + 1) * t;
             let kappa = stiffness.kappa[i];
@@ -291,7 +288,7 @@ pub fn descend(
         if let Some(bounds) = lagged.as_mut().filter(|_| sweep % params.lagged == 0) {
             bounds.iter_mut().enumerate().for_each(|(i, g)| *g = bound_at(&w, i));
         }
-        let frozen = frozen_at(&lagged, given);
+        let frozen = lagged.as_deref().or(given);
         if frozen.is_none() && step.law_residual(&w, &xi, frozen) / g_min(&w, frozen) <= params.tolerance {
             // Converged on the updated gradient: confirm on a fresh one (no drift of the
             // updates), and carry it on if not. (A convex subproblem's result is an iterate of

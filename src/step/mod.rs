@@ -124,16 +124,6 @@ pub enum Prediction {
     Law,
 }
 
-impl Prediction {
-    /// The name in scenarios and summaries.
-    pub fn name(self) -> &'static str {
-        match self {
-            Prediction::Loop => "loop",
-            Prediction::Law => "law",
-        }
-    }
-}
-
 /// The largest [`KrylovParams::overlap`] there is.
 pub const MAX_OVERLAP: usize = 1;
 
