@@ -186,6 +186,11 @@ struct tc_dist {
   PetscReal rtol;
   PetscInt  max_its;
   Vec       final_residual, work;
+  /* GCR's restart as set up (restart) and as asked (restart_max), and the preconditioner's
+   * code: tc_dist_krylov_setup starts below the asked restart and the first solve that needs
+   * more sets the solver up again with it (tc_dist_solve_from). */
+  PetscInt restart, restart_max;
+  int      preconditioner;
 };
 typedef struct tc_dist tc_dist;
 
@@ -595,33 +600,34 @@ static PetscErrorCode tc_dist_product(Mat product, Vec x, Vec y)
   PetscFunctionReturn(0);
 }
 
-/* The Krylov solver on the current values: GCR(restart) (PETSc's KSPGCR: GMRES's iterates in
- * exact arithmetic, with its residual and solution kept explicitly, so that a solve ends without
- * a last preconditioner application and hands its residual over, tc_dist_solve_from) on A
- * through tc_dist_product, with block Jacobi + ILU(0)
- * (preconditioner 0), GAMG (1), block Jacobi with the caller's block preconditioner (2, a
- * PCSHELL, given to each tc_dist_solve_from) or restricted additive Schwarz with the caller's
- * preconditioner of the overlapped block (3, a PCSHELL: tc_dist_set_overlap first), relative tolerance rtol, at most max_its
- * iterations; options under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
-static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
+/* GCR's restart until a solve needs more (tc_dist_krylov_setup). PETSc's GCR allocates its
+ * 2 restart directions when it is set up, where the solves of a run's Newton iterations mostly
+ * take a few Krylov iterations each (2.4 on average at 972k unknowns, none more than 9): at
+ * restart 30, 60 vectors of a rank's rows (220 MiB per rank at 972k on 2 ranks) of which a few
+ * are ever written. Up to this many iterations GCR(10) and GCR(30) make the same iterates. */
+#define TC_GCR_FIRST_RESTART 10
+
+/* The Krylov solver of tc_dist_krylov_setup's settings, GCR with `restart`: made again, its
+ * directions allocated. */
+static PetscErrorCode tc_dist_krylov_make(tc_dist *dist, PetscInt restart)
 {
   PC       pc;
   PetscInt m, n;
+  int      preconditioner = dist->preconditioner;
   PetscFunctionBeginUser;
+  dist->restart = restart;
   if (!dist->product) {
     PetscCall(MatGetLocalSize(dist->A, &m, &n));
     PetscCall(MatCreateShell(PETSC_COMM_WORLD, m, n, PETSC_DETERMINE, PETSC_DETERMINE, dist, &dist->product));
     PetscCall(MatShellSetOperation(dist->product, MATOP_MULT, (void (*)(void))tc_dist_product));
   }
-  dist->rtol    = rtol;
-  dist->max_its = max_its;
   PetscCall(KSPDestroy(&dist->ksp));
   PetscCall(KSPCreate(PETSC_COMM_WORLD, &dist->ksp));
   PetscCall(KSPSetOptionsPrefix(dist->ksp, "tc_dist_"));
   PetscCall(KSPSetOperators(dist->ksp, dist->product, dist->A));
   PetscCall(KSPSetType(dist->ksp, KSPGCR));
-  PetscCall(KSPGCRSetRestart(dist->ksp, restart));
-  PetscCall(KSPSetTolerances(dist->ksp, rtol, 0.0, PETSC_DEFAULT, max_its));
+  PetscCall(KSPGCRSetRestart(dist->ksp, dist->restart));
+  PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
   PetscCall(KSPSetNormType(dist->ksp, KSP_NORM_UNPRECONDITIONED));
   PetscCall(KSPSetPCSide(dist->ksp, PC_RIGHT));
   PetscCall(KSPGetPC(dist->ksp, &pc));
@@ -648,6 +654,25 @@ static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, do
   }
   PetscCall(KSPSetFromOptions(dist->ksp));
   PetscCall(KSPSetUp(dist->ksp));
+  PetscFunctionReturn(0);
+}
+
+/* The Krylov solver on the current values: GCR(restart) (PETSc's KSPGCR: GMRES's iterates in
+ * exact arithmetic, with its residual and solution kept explicitly, so that a solve ends without
+ * a last preconditioner application and hands its residual over, tc_dist_solve_from) on A
+ * through tc_dist_product, with block Jacobi + ILU(0)
+ * (preconditioner 0), GAMG (1), block Jacobi with the caller's block preconditioner (2, a
+ * PCSHELL, given to each tc_dist_solve_from) or restricted additive Schwarz with the caller's
+ * preconditioner of the overlapped block (3, a PCSHELL: tc_dist_set_overlap first), relative tolerance rtol, at most max_its
+ * iterations; options under the prefix tc_dist_ (PETSC_OPTIONS="-tc_dist_ksp_monitor"). */
+static PetscErrorCode tc_dist_krylov_setup(tc_dist *dist, int preconditioner, double rtol, int max_its, int restart)
+{
+  PetscFunctionBeginUser;
+  dist->preconditioner = preconditioner;
+  dist->rtol           = rtol;
+  dist->max_its        = max_its;
+  dist->restart_max    = restart;
+  PetscCall(tc_dist_krylov_make(dist, PetscMin(restart, TC_GCR_FIRST_RESTART)));
   PetscFunctionReturn(0);
 }
 
@@ -721,6 +746,8 @@ int tc_dist_solve(tc_dist *dist, double *owned, int *iterations, double *residua
 {
   PetscReal bnorm;
   PetscFunctionBeginUser;
+  /* From zero: GCR with the asked restart from the start. */
+  if (dist->restart < dist->restart_max) PetscCall(tc_dist_krylov_make(dist, dist->restart_max));
   PetscCall(VecZeroEntries(dist->x));
   PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
   PetscCall(KSPSolve(dist->ksp, dist->b, dist->x));
@@ -741,6 +768,51 @@ static PetscErrorCode tc_dist_work_vectors(tc_dist *dist)
   PetscFunctionReturn(0);
 }
 
+/* KSPSolve from the x and b set, with a nonzero guess (the caller's block preconditioner set
+ * in dist for its length); x's known zero forgotten after. */
+static PetscErrorCode tc_dist_ksp_solve(tc_dist *dist)
+{
+  PetscErrorCode solved;
+  PetscFunctionBeginUser;
+  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
+  solved             = KSPSolve(dist->ksp, dist->b, dist->x);
+  dist->x_zero_known = PETSC_FALSE;
+  PetscCall(solved);
+  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
+  PetscFunctionReturn(0);
+}
+
+/* The correction d of A d = b from d = 0 into x (b the residual carried in), stopped at
+ * ||b − A d|| <= target or after max_its iterations: the first product, with x still zero,
+ * answered without A (tc_dist_product). */
+static PetscErrorCode tc_dist_correction(tc_dist *dist, PetscReal target, PetscInt max_its)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecZeroEntries(dist->x));
+  PetscCall(PetscObjectStateGet((PetscObject)dist->x, &dist->x_zero_state));
+  dist->x_zero_known = PETSC_TRUE;
+  PetscCall(KSPSetTolerances(dist->ksp, 0.0, target, PETSC_DEFAULT, max_its));
+  PetscCall(tc_dist_ksp_solve(dist));
+  PetscFunctionReturn(0);
+}
+
+/* v += the n_owned values `from` at this rank's entries (x = guess + correction). */
+static PetscErrorCode tc_dist_add_owned(Vec v, const double *from)
+{
+  PetscInt     n;
+  PetscScalar *a;
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(v, &n));
+  PetscCall(VecGetArray(v, &a));
+  for (PetscInt i = 0; i < n; ++i) a[i] += from[i];
+  PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(0);
+}
+
+static PetscErrorCode tc_dist_solve_from_set(tc_dist *dist, const double *rhs, const double *carried, double *owned,
+                                             double *final_residual, double forcing, int *iterations, double *residual,
+                                             int *reason);
+
 /* Solves A x = b with this rank's owned entries of b (`rhs`) and of the initial guess (`owned`,
  * overwritten by the solution): no off-process entries, so no assembly. `carried`: NULL, or
  * this rank's entries of b − A x for that guess, which the solve then starts from instead of a
@@ -752,27 +824,46 @@ static PetscErrorCode tc_dist_work_vectors(tc_dist *dist)
  * be `carried`'s buffer, read before it is written). `block_apply` and
  * `block_ctx`: the block preconditioner of preconditioner 2 for this solve (NULL otherwise).
  * Iterations, the final relative residual ||b - Ax|| / ||b|| and the converged reason as
- * tc_dist_solve. */
+ * tc_dist_solve. While GCR runs below the asked restart (TC_GCR_FIRST_RESTART), a solve that
+ * has not converged at the restart goes on from where it stopped with the asked restart, which
+ * the later solves keep. */
 int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, double *owned, double *final_residual,
                        int (*block_apply)(void *, const double *, double *, int), void *block_ctx, double forcing,
                        int *iterations, double *residual, int *reason)
 {
-  PetscInt     n;
-  PetscReal    bnorm, rnorm;
-  PetscScalar *v;
-  Vec          r;
+  PetscErrorCode solved;
+  dist->block_apply = block_apply;
+  dist->block_ctx   = block_ctx;
+  solved = tc_dist_solve_from_set(dist, rhs, carried, owned, final_residual, forcing, iterations, residual, reason);
+  dist->block_apply = NULL;
+  dist->block_ctx   = NULL;
+  return (int)solved;
+}
+
+/* tc_dist_solve_from with the block preconditioner set. */
+static PetscErrorCode tc_dist_solve_from_set(tc_dist *dist, const double *rhs, const double *carried, double *owned,
+                                             double *final_residual, double forcing, int *iterations, double *residual,
+                                             int *reason)
+{
+  PetscReal bnorm, rnorm, target;
+  PetscInt  cap, first;
+  Vec       r;
+  PetscBool capped;
   PetscFunctionBeginUser;
   PetscCall(tc_vec_set_owned(dist->b, rhs));
   PetscCall(VecNorm(dist->b, NORM_2, &bnorm));
+  /* Below the asked restart a solve stops at the restart; one that has not converged by then
+   * goes on from there with the asked restart (tc_dist_krylov_make), to the same tolerance. */
+  capped = dist->restart < dist->restart_max && dist->restart < dist->max_its;
+  cap    = capped ? dist->restart : dist->max_its;
+  target = dist->rtol * bnorm;
   /* A zero b leaves the tolerance on ||b|| at zero: solved from the guess, as before. */
   if (carried && bnorm > 0) {
     PetscCall(tc_vec_set_owned(dist->b, carried));
-    PetscCall(VecZeroEntries(dist->x));
-    PetscCall(PetscObjectStateGet((PetscObject)dist->x, &dist->x_zero_state));
-    dist->x_zero_known = PETSC_TRUE;
     rnorm = 0;
     if (forcing > 0) PetscCall(VecNorm(dist->b, NORM_2, &rnorm));
-    PetscCall(KSPSetTolerances(dist->ksp, 0.0, PetscMax(dist->rtol * bnorm, forcing * rnorm), PETSC_DEFAULT, dist->max_its));
+    target = PetscMax(dist->rtol * bnorm, forcing * rnorm);
+    PetscCall(tc_dist_correction(dist, target, cap));
   } else {
     carried = NULL;
     PetscCall(tc_vec_set_owned(dist->x, owned));
@@ -783,27 +874,27 @@ int tc_dist_solve_from(tc_dist *dist, const double *rhs, const double *carried, 
       PetscCall(MatMult(dist->A, dist->x, dist->work));
       PetscCall(VecAYPX(dist->work, -1.0, dist->b));
       PetscCall(VecNorm(dist->work, NORM_2, &rnorm));
-      PetscCall(KSPSetTolerances(dist->ksp, 0.0, PetscMax(dist->rtol * bnorm, forcing * rnorm), PETSC_DEFAULT, dist->max_its));
-    } else PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, dist->max_its));
+      target = PetscMax(dist->rtol * bnorm, forcing * rnorm);
+      PetscCall(KSPSetTolerances(dist->ksp, 0.0, target, PETSC_DEFAULT, cap));
+    } else PetscCall(KSPSetTolerances(dist->ksp, dist->rtol, 0.0, PETSC_DEFAULT, cap));
+    PetscCall(tc_dist_ksp_solve(dist));
   }
-  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_TRUE));
-  dist->block_apply = block_apply;
-  dist->block_ctx   = block_ctx;
-  PetscErrorCode solved = KSPSolve(dist->ksp, dist->b, dist->x);
-  dist->block_apply  = NULL;
-  dist->block_ctx    = NULL;
-  dist->x_zero_known = PETSC_FALSE;
-  PetscCall(solved);
-  PetscCall(KSPSetInitialGuessNonzero(dist->ksp, PETSC_FALSE));
   PetscCall(tc_dist_outcome(dist, bnorm, iterations, residual, reason));
-  if (carried) {
-    /* x = guess + d, in the solver's x too: the gathers read the solution there. */
-    PetscCall(VecGetLocalSize(dist->x, &n));
-    PetscCall(VecGetArray(dist->x, &v));
-    for (PetscInt i = 0; i < n; ++i) v[i] += owned[i];
-    PetscCall(VecRestoreArray(dist->x, &v));
-  }
+  if (carried) PetscCall(tc_dist_add_owned(dist->x, owned));
   PetscCall(tc_vec_get_owned(dist->x, owned));
+  if (capped && *reason == KSP_DIVERGED_ITS) {
+    /* On from x with the asked restart: A d = b − A x from d = 0, b − A x GCR's own. */
+    first = *iterations;
+    PetscCall(tc_dist_work_vectors(dist));
+    PetscCall(KSPBuildResidual(dist->ksp, dist->work, dist->final_residual, &r));
+    PetscCall(VecCopy(r, dist->b));
+    PetscCall(tc_dist_krylov_make(dist, dist->restart_max));
+    PetscCall(tc_dist_correction(dist, target, dist->max_its - first));
+    PetscCall(tc_dist_outcome(dist, bnorm, iterations, residual, reason));
+    *iterations += (int)first;
+    PetscCall(tc_dist_add_owned(dist->x, owned));
+    PetscCall(tc_vec_get_owned(dist->x, owned));
+  }
   if (final_residual) {
     PetscCall(tc_dist_work_vectors(dist));
     PetscCall(KSPBuildResidual(dist->ksp, dist->work, dist->final_residual, &r));
