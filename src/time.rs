@@ -150,13 +150,17 @@ impl<'a> Levels<'a> {
             .since(self.setup_stats.get())
     }
 
-    /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]).
-    fn energy(&self, previous: &State, state: &State) -> Result<crate::model::StepEnergy, StepError> {
+    /// The energies of the (sub)step from `previous` to `state` ([`crate::model::energy`]); a
+    /// rank of a distributed run keeps the elastic force its pass forms in the state, for the
+    /// next step's right-hand side ([`State::elastic_force`]).
+    fn energy(&self, previous: &State, state: &mut State) -> Result<crate::model::StepEnergy, StepError> {
         let clock = Instant::now();
-        let energy = crate::model::step_energy(self.problem, previous, state);
+        let energy = crate::model::step_energy_and_elastic_force(self.problem, previous, state);
         self.energy_seconds
             .set(self.energy_seconds.get() + clock.elapsed().as_secs_f64());
-        Ok(energy?)
+        let (energy, elastic_force) = energy?;
+        state.elastic_force = elastic_force;
+        Ok(energy)
     }
 
     /// One step from `previous` to time `t` at level `depth`, cut into two halves of the next
@@ -165,10 +169,10 @@ impl<'a> Levels<'a> {
         // A step cut short from outside (`step::abort`) stops before each (sub)step.
         crate::step::abort::check()?;
         match self.level(depth)?.step(previous, t) {
-            Ok((state, mut info)) => {
+            Ok((mut state, mut info)) => {
                 info.substeps = 1;
                 info.cutback_depth = depth;
-                info.energy = self.energy(previous, &state)?;
+                info.energy = self.energy(previous, &mut state)?;
                 Ok((state, info))
             }
             Err(SolveError::Other(error)) => Err(error.into()),

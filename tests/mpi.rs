@@ -259,7 +259,12 @@ mod distributed {
         let mut u = vec![0.0; owned.len()];
         assert!(matrix.solve_from(&params, (&rhs, &mut u), None, None).is_err());
         let info = matrix.solve_from(&params, (&rhs, &mut u), None, Some(&block)).unwrap();
-        assert_exact(owned.clone(), &u, h, &format!("block Jacobi, {} iterations", info.iterations));
+        assert_exact(
+            owned.clone(),
+            &u,
+            h,
+            &format!("block Jacobi, {} iterations", info.iterations),
+        );
         // Without a preconditioner (the identity as each rank's block) the solve needs more
         // iterations than GCR's first restart (10): it goes on with the asked restart from
         // where it stopped, and so does the next solve, to the same exact values and the
@@ -278,8 +283,16 @@ mod distributed {
             let (mut u, mut residual) = (vec![0.0; owned.len()], Vec::new());
             let info = (matrix.solve_from(&params, (&rhs, &mut u), Some(&mut residual), Some(&Identity))).unwrap();
             assert!(info.iterations > 10, "{info:?}");
-            assert_exact(owned.clone(), &u, h, &format!("unpreconditioned, {} iterations", info.iterations));
-            assert!(residual.iter().all(|r| r.abs() <= 1e-12 * 2.0 * h * n as f64), "{residual:?}");
+            assert_exact(
+                owned.clone(),
+                &u,
+                h,
+                &format!("unpreconditioned, {} iterations", info.iterations),
+            );
+            assert!(
+                residual.iter().all(|r| r.abs() <= 1e-12 * 2.0 * h * n as f64),
+                "{residual:?}"
+            );
         }
     }
 

@@ -437,6 +437,7 @@ impl PyState {
             slip_distance: self.slip_distance[0].clone(),
             slip_distance_before: self.slip_distance[1].clone(),
             pressure: self.pressure.clone(),
+            elastic_force: Vec::new(),
         })
     }
 }

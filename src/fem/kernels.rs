@@ -165,7 +165,22 @@ pub fn isotropic_stiffness_product(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4
 /// [`isotropic_stiffness_product`] in D dimensions.
 #[inline(always)]
 fn stiffness_product_in<const D: usize>(t: &Simplex, law: Isotropic, v: &[[f64; 3]; 4]) -> [[f64; 3]; 4] {
-    let stress = stress_in::<D>(law, &gradient_in::<D>(t, v));
+    gradient_stiffness_product_in::<D>(t, law, &gradient_in::<D>(t, v))
+}
+
+/// [`isotropic_stiffness_product`] of the field whose gradient is `grad` ([`gradient_of`]):
+/// the same numbers, for a caller that takes the field's gradient once for several integrands.
+pub fn isotropic_stiffness_product_of_gradient(t: &Simplex, law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 3]; 4] {
+    match t.dim {
+        2 => gradient_stiffness_product_in::<2>(t, law, grad),
+        _ => gradient_stiffness_product_in::<3>(t, law, grad),
+    }
+}
+
+/// [`isotropic_stiffness_product_of_gradient`] in D dimensions.
+#[inline(always)]
+fn gradient_stiffness_product_in<const D: usize>(t: &Simplex, law: Isotropic, grad: &[[f64; 3]; 3]) -> [[f64; 3]; 4] {
+    let stress = stress_in::<D>(law, grad);
     let mut out = [[0.0; 3]; 4];
     for (a, row) in out.iter_mut().enumerate().take(D + 1) {
         for (i, value) in row.iter_mut().enumerate().take(D) {

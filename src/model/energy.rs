@@ -67,7 +67,7 @@ use serde::{Deserialize, Serialize};
 use super::error::ModelError as Error;
 use super::laws::ContactLaws;
 use super::problem::Problem;
-use super::share::ColumnShare;
+use super::share::{ColumnShare, RowProducts};
 use super::state::State;
 use crate::fem::assembly::{Matrices, VectorMass};
 use crate::la::vector::{dot, norm2};
@@ -233,7 +233,7 @@ pub fn energy_levels(problem: &Problem, state: &State) -> Result<(f64, f64, f64)
                 (&problem.mesh, &problem.materials),
                 [&state.u],
                 [(|m| m.elasticity, 0, 0)],
-                None,
+                RowProducts::default(),
             );
             share.sum(&mut part)?;
             part[0]
@@ -254,17 +254,34 @@ pub fn energy_levels(problem: &Problem, state: &State) -> Result<(f64, f64, f64)
 /// a share of the matrices ([`ColumnShare`]) the terms that read 𝒦_A, 𝒦_B, G or F are its own
 /// nodes' part, summed over the ranks in one reduction: collective then.
 pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result<StepEnergy, Error> {
+    Ok(step_energy_and_elastic_force(problem, previous, state)?.0)
+}
+
+/// [`step_energy`], and where a process holds a share of the matrices ([`ColumnShare`]) the
+/// elastic force 𝒦_B U_n in its rows (its own and Γ_C's nodes' entries; the others partial),
+/// which its pass over the cells for the forms makes from the gradients of u it takes anyway:
+/// the next step's right-hand side reads it from the state ([`State::elastic_force`]) instead
+/// of a pass of its own. Empty where the process holds the whole 𝒦_B.
+pub fn step_energy_and_elastic_force(
+    problem: &Problem,
+    previous: &State,
+    state: &State,
+) -> Result<(StepEnergy, Vec<f64>), Error> {
     let k = state.t - previous.t;
     let (w, u) = (&state.w, &state.u);
     let share = problem.columns.as_ref();
     let dw: Vec<f64> = w.iter().zip(&previous.w).map(|(a, b)| a - b).collect();
     let du: Vec<f64> = u.iter().zip(&previous.u).map(|(a, b)| a - b).collect();
     // The forms, and Gᵀw, whose rows the heat balance needs too: k wᵀGθ = k θ·(Gᵀw).
-    let (mut forms, coupling) = match share {
+    let (mut forms, coupling, elastic_force) = match share {
         None => {
             let mut coupling = vec![0.0; state.theta.len()];
             problem.matrices.coupling.mul_transpose_add(1.0, w, &mut coupling);
-            (mechanical_forms(&problem.matrices, w, &dw, u, &du), coupling)
+            (
+                mechanical_forms(&problem.matrices, w, &dw, u, &du),
+                coupling,
+                Vec::new(),
+            )
         }
         Some(share) => shared_mechanical_forms(problem, share, w, &dw, u, &du),
     };
@@ -315,7 +332,7 @@ pub fn step_energy(problem: &Problem, previous: &State, state: &State) -> Result
     e.heat_residual =
         e.thermal_change - (e.heat_sources + e.heat_exchange + e.heat_friction + e.heat_coupling + e.heat_dirichlet);
     e.heat_scale = e.largest_heat_term();
-    Ok(e)
+    Ok((e, elastic_force))
 }
 
 /// a·b over the entries of the nodes this process owns (`per_node` entries per node), all
@@ -451,8 +468,8 @@ fn mechanical_forms(mats: &Matrices, w: &[f64], dw: &[f64], u: &[f64], du: &[f64
 
 /// [`mechanical_forms`]' parts on a process that keeps no stiffness matrix ([`ColumnShare`]):
 /// ℳ's forms over the entries of its own nodes (ℳ is whole on every process), 𝒦_A's and 𝒦_B's
-/// over the cells it owns, from the kernels ([`ColumnShare::stiffness_forms`]); with Gᵀw at
-/// its nodes, from the same pass over its cells.
+/// over the cells it owns, from the kernels ([`ColumnShare::stiffness_forms`]); with Gᵀw and
+/// 𝒦_B u in its rows, from the same pass over its cells.
 fn shared_mechanical_forms(
     problem: &Problem,
     share: &ColumnShare,
@@ -460,9 +477,10 @@ fn shared_mechanical_forms(
     dw: &[f64],
     u: &[f64],
     du: &[f64],
-) -> (MechanicalForms, Vec<f64>) {
+) -> (MechanicalForms, Vec<f64>, Vec<f64>) {
     let [mw, mdw, dmd] = share.mass_forms(&problem.matrices.mass, [w, dw], [(0, 0), (0, 1), (1, 1)]);
     let mut coupling = vec![0.0; problem.mesh.n_nodes()];
+    let mut elastic_force = vec![0.0; u.len()];
     let [aw, bu, bdu, dbd] = share.stiffness_forms(
         (&problem.mesh, &problem.materials),
         [w, u, du],
@@ -472,9 +490,16 @@ fn shared_mechanical_forms(
             (|m| m.elasticity, 1, 2),
             (|m| m.elasticity, 2, 2),
         ],
-        Some((0, &mut coupling)),
+        RowProducts {
+            coupling: Some((0, &mut coupling)),
+            product: Some((|m| m.elasticity, 1, &mut elastic_force)),
+        },
     );
-    (MechanicalForms::from([mw, mdw, dmd, aw, bu, bdu, dbd]), coupling)
+    (
+        MechanicalForms::from([mw, mdw, dmd, aw, bu, bdu, dbd]),
+        coupling,
+        elastic_force,
+    )
 }
 
 fn same_pattern(a: &CscMatrix, b: &CscMatrix) -> bool {

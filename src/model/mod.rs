@@ -37,14 +37,14 @@ pub mod thermal;
 pub use contact_rows::{contact_rows, contact_tangential, ContactRow};
 #[cfg(feature = "mpi")]
 pub use distributed::{node_unknowns, DistributedStepMatrix};
-pub use energy::{step_energy, StepEnergy};
+pub use energy::{step_energy, step_energy_and_elastic_force, StepEnergy};
 pub use error::ModelError;
 pub use laws::{
     foundation_tangential, law_scale, relative_slip, ContactLaws, Friction, FrictionConstants, Heating, LawConstants,
 };
 pub use pressure::ContactPressure;
 pub use problem::*;
-pub use share::{nodes_within, ColumnShare};
+pub use share::{nodes_within, ColumnShare, RowProducts};
 pub use state::State;
 pub use step_matrix::{
     assemble_by_columns, ordered_rows, ordered_rows_at, ordered_rows_range, rows_of_symmetric_form,

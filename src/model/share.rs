@@ -18,7 +18,10 @@
 //! ([`crate::fem::assembly::assemble_stiffness_columns`], the same bits), and the two other
 //! users, the right-hand side's −𝒦_B U_{n−1} and the energies, are summed cell by cell from the
 //! kernels ([`ColumnShare::stiffness_mul_add`],
-//! [`ColumnShare::stiffness_forms`]): the same sums as the matrices', to rounding.
+//! [`ColumnShare::stiffness_forms`]): the same sums as the matrices', to rounding. One pass a
+//! step serves both: the energies' pass over the cells also forms 𝒦_B U_n from the gradients
+//! of u it takes, and the next step's right-hand side reads it from the state
+//! ([`super::State::elastic_force`]; a product of its own only from a state made anew).
 //!
 //! **The energies** ([`crate::model::energy`]) are sums over cells and nodes. A rank sums the
 //! stiffness forms over the cells whose lowest node it owns, ℳ's forms and the terms of G and
@@ -134,22 +137,24 @@ impl ColumnShare {
     /// `fields` (full nodal vectors), 𝒦 the stiffness of the law: the sums over the cells it
     /// owns (the owner of a cell's lowest node sums it) of ∫_T 𝒯ε(x_a) : ε(x_b)
     /// (`fem::kernels::isotropic_energy_density`, each field's gradient taken once a cell), to be
-    /// summed over the ranks ([`ColumnShare::sum`]). With `coupling` = (c, out), the same pass
-    /// also gives Gᵀx_c in `out` (a vector of the mesh's nodes) at this process's own and Γ_C's
-    /// nodes (the others partial): each node of a cell gets c_T ∫_T div x_c / (d + 1), from
-    /// every cell that holds one of those nodes.
+    /// summed over the ranks ([`ColumnShare::sum`]); the same pass, from the same gradients,
+    /// also forms the products `along` asks for ([`RowProducts`]).
     pub fn stiffness_forms<const N: usize, const F: usize>(
         &self,
         (mesh, materials): (&Mesh, &CellMaterials),
         fields: [&[f64]; N],
         forms: [(LawOf, usize, usize); F],
-        mut coupling: Option<(usize, &mut [f64])>,
+        RowProducts {
+            mut coupling,
+            mut product,
+        }: RowProducts,
     ) -> [f64; F] {
         let d = mesh.dim;
         let mut sums = [0.0; F];
+        let every_row_cell = coupling.is_some() || product.is_some();
         for e in self.row_cells.iter().map(|&e| e as usize) {
             let owned = self.owns_cell(mesh, e);
-            if !owned && coupling.is_none() {
+            if !owned && !every_row_cell {
                 continue;
             }
             let (t, nodes) = cell_simplex(mesh, e);
@@ -159,6 +164,14 @@ impl ColumnShare {
                 let div: f64 = (0..d).map(|i| grads[*c][i][i]).sum();
                 let share = material.expansion * t.measure * div / (d + 1) as f64;
                 nodes.iter().for_each(|&p| out[p] += share);
+            }
+            if let Some((law, c, out)) = product.as_mut() {
+                let kx = kernels::isotropic_stiffness_product_of_gradient(&t, law(material), &grads[*c]);
+                for (a, &p) in nodes.iter().enumerate() {
+                    for i in 0..d {
+                        out[p * d + i] += kx[a][i];
+                    }
+                }
             }
             if owned {
                 for (sum, &(law, a, b)) in sums.iter_mut().zip(&forms) {
@@ -245,6 +258,19 @@ pub(super) fn columns_read_by(mesh: &Mesh, rows: &[bool]) -> Vec<bool> {
     around(mesh, rows).0
 }
 
+/// The products that [`ColumnShare::stiffness_forms`]' pass forms along the forms, at the
+/// process's own and Γ_C's nodes (the others partial), from every cell that holds one of those
+/// nodes.
+#[derive(Default)]
+pub struct RowProducts<'o> {
+    /// (c, out): Gᵀx_c in `out` (a vector of the mesh's nodes; each node of a cell gets
+    /// c_T ∫_T div x_c / (d + 1)).
+    pub coupling: Option<(usize, &'o mut [f64])>,
+    /// (law, c, out): 𝒦 x_c added to `out` (a vector field), 𝒦 the stiffness of the law: the
+    /// rows of [`ColumnShare::stiffness_mul_add`]'s product, each cell's the same numbers.
+    pub product: Option<(LawOf, usize, &'o mut [f64])>,
+}
+
 /// Which of a material's isotropic laws a stiffness is of (`|m| m.viscosity`: 𝒦_A,
 /// `|m| m.elasticity`: 𝒦_B).
 pub type LawOf = fn(&Material) -> Isotropic;
@@ -278,7 +304,7 @@ fn nodal_in<const D: usize>(nodes: &[usize], v: &[f64]) -> [[f64; 3]; 4] {
 #[cfg(test)]
 mod tests {
     use super::super::samples::paper_3d_builder;
-    use super::super::{ordered_rows, ordered_rows_at, step_energy, Problem, State};
+    use super::super::{ordered_rows, ordered_rows_at, step_energy, step_energy_and_elastic_force, Problem, State};
 
     /// A state with every field rough (not a solution: the energies are sums of its terms).
     fn rough_state(problem: &Problem, seed: usize, t: f64) -> State {
@@ -377,6 +403,26 @@ mod tests {
             assert_eq!(e.frictional.to_bits(), total.frictional.to_bits());
             assert_eq!(e.thermal.to_bits(), total.thermal.to_bits());
             assert_eq!(e.heat_exchange.to_bits(), total.heat_exchange.to_bits());
+        }
+
+        // The elastic force the share's pass for the energies forms on the way is the next
+        // step's −𝒦_B U_n: the right-hand side that reads it has the whole problem's rows.
+        let (_, force) = step_energy_and_elastic_force(&whole, &previous, &state).unwrap();
+        assert!(force.is_empty(), "the whole problem forms 𝒦_B U_n with its matrix");
+        let (_, force) = step_energy_and_elastic_force(share, &previous, &state).unwrap();
+        assert_eq!(force.len(), state.u.len());
+        let b_whole = whole_rhs.rhs(&whole, &state, 0.3125, None).unwrap();
+        let mut kept = state.clone();
+        kept.elastic_force = force;
+        let b_share = share_rhs.rhs(share, &kept, 0.3125, None).unwrap();
+        let scale = b_whole.iter().fold(0.0f64, |s, b| s.max(b.abs()));
+        for &r in &rows {
+            assert!(
+                (b_share[r] - b_whole[r]).abs() <= 1e-13 * scale,
+                "right-hand side row {r} from the kept force: {} against {}",
+                b_share[r],
+                b_whole[r]
+            );
         }
     }
 }

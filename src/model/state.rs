@@ -29,6 +29,13 @@ pub struct State {
     /// p_n: the contact pressure at each contact node where a friction law scales with it
     /// (Coulomb, [`super::ContactPressure`]); empty otherwise.
     pub pressure: Vec<f64>,
+    /// 𝒦_B U_n in the rows of a process that holds a share of the matrices (a distributed
+    /// run's rank: its own and Γ_C's nodes' entries, the others partial), formed by the
+    /// energies' pass over its cells ([`super::step_energy_and_elastic_force`]) and read by the
+    /// next step's right-hand side; empty otherwise (one process, whose 𝒦_B is assembled; a
+    /// state made or read anew), where the right-hand side forms the product itself. Not
+    /// checkpointed.
+    pub elastic_force: Vec<f64>,
 }
 
 impl State {
@@ -62,6 +69,7 @@ impl State {
             } else {
                 Vec::new()
             },
+            elastic_force: Vec::new(),
         }
     }
 }

@@ -571,6 +571,10 @@ impl StepRhs {
         mats.mass.mul_add(1.0 / self.k, &previous.w, &mut mech);
         match &problem.columns {
             None => mats.elasticity.mul_add(-1.0, &previous.u, &mut mech),
+            // A rank's energies' pass formed 𝒦_B U_{n−1} in its rows (State::elastic_force).
+            Some(_) if !previous.elastic_force.is_empty() => {
+                mech.iter_mut().zip(&previous.elastic_force).for_each(|(m, f)| *m -= f);
+            }
             Some(share) => share.stiffness_mul_add(
                 (&problem.mesh, &problem.materials),
                 |m| m.elasticity,
@@ -637,6 +641,7 @@ impl StepRhs {
             slip_distance: Vec::new(),
             slip_distance_before: Vec::new(),
             pressure: Vec::new(),
+            elastic_force: Vec::new(),
         };
         state.accumulate_slip(problem, previous);
         state

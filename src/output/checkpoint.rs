@@ -229,6 +229,7 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
         slip_distance: next(),
         slip_distance_before: Vec::new(),
         pressure: next(),
+        elastic_force: Vec::new(),
     };
     // Four arrays (a checkpoint older than the slip distances): `slip_distance` stays empty,
     // which the laws and the next step read as zeros.
@@ -292,6 +293,7 @@ mod tests {
             slip_distance: vec![0.125],
             slip_distance_before: Vec::new(),
             pressure: Vec::new(),
+            elastic_force: Vec::new(),
         }
     }
 

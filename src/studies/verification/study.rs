@@ -326,6 +326,7 @@ pub fn manufactured_with(
                     slip_distance: Vec::new(),
                     slip_distance_before: Vec::new(),
                     pressure: Vec::new(),
+                    elastic_force: Vec::new(),
                 };
                 norms.push(&exact_errors(&problem, &zero, &exact, t));
             }
