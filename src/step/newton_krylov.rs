@@ -481,6 +481,7 @@ struct Linearization<'s> {
     laws: &'s ContactLaws<'s>,
     /// d − 1.
     td: usize,
+    /// b̃: b with the contact terms of the last linearization.
     rhs: Vec<f64>,
     /// b̃ − Ã x after the last solve (empty before the step's first).
     residual: Vec<f64>,
@@ -714,8 +715,14 @@ impl Linearization<'_> {
         let sys = self.system;
         let (td, n) = (self.td, sys.order.len());
         let a = &mut *self.a;
+        // b̃ is b but in the rows a linearization changes: Γ_C's and the contact nodes'
+        // temperature rows (`rhs` starts as b).
         let rhs = &mut self.rhs;
-        rhs.copy_from_slice(self.b);
+        rhs[sys.first_contact..].copy_from_slice(&self.b[sys.first_contact..]);
+        sys.nodes
+            .iter()
+            .filter_map(|node| node.theta)
+            .for_each(|row| rhs[row] = self.b[row]);
         a.values_from_mut(sys.first_contact).copy_from_slice(&sys.base);
         self.nodes.clear();
         for (i, node) in sys.nodes.iter().enumerate() {
@@ -940,7 +947,7 @@ impl<'a> NewtonKrylov<'a> {
         info: &mut StepInfo,
     ) -> Result<AllUnknowns, SolveError> {
         let (problem, sys) = (self.problem, &self.system);
-        let (td, n) = (problem.dim() - 1, sys.order.len());
+        let td = problem.dim() - 1;
         // w_τ relative to the foundation at the unknowns x.
         let relative_slip = |x: &[f64]| {
             let mut w = self.tangential(x);
@@ -962,7 +969,7 @@ impl<'a> NewtonKrylov<'a> {
                 b,
                 laws,
                 td,
-                rhs: vec![0.0; n],
+                rhs: b.to_vec(),
                 residual: Vec::new(),
                 tight: false,
                 nodes: Vec::with_capacity(sys.nodes.len()),
