@@ -81,6 +81,18 @@ pub struct KrylovSystem {
     condensed: Mutex<Option<Arc<CsrMatrix>>>,
 }
 
+/// Where a row of Ã that a linearization changes is kept (in one process: here, every one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub(super) enum RowHere {
+    /// This process's (rank's) own row: it linearizes it, and the row's unknowns are its.
+    Owned,
+    /// A row of another rank that this rank's overlapping block holds: it linearizes it too.
+    Overlap,
+    /// Another rank's, which this rank leaves to it.
+    Elsewhere,
+}
+
 /// What solves Ã x = b̃ by GMRES: this process, with the ILU(0) of Ã (and the AMG's coarse
 /// correction of the velocities where the system has one), or PETSc over the MPI ranks of a
 /// distributed run ([`KrylovParams::distributed`], [`super::ranks`]).
@@ -101,6 +113,29 @@ impl KrylovSolver {
             KrylovSolver::Process { ilu, .. } => ilu.refactor_from(a, first_changed),
             #[cfg(feature = "mpi")]
             KrylovSolver::Ranks(ranks) => ranks.set_matrix(a, first_changed),
+        }
+    }
+
+    /// Where row `row` of Ã, one a linearization changes (Γ_C's), is kept: every row is this
+    /// process's own; on the ranks, a rank's own, its block's overlap or another's
+    /// ([`super::ranks::RankKrylov::row_here`]).
+    #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
+    pub(super) fn row_here(&self, row: usize) -> RowHere {
+        match self {
+            KrylovSolver::Process { .. } => RowHere::Owned,
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(ranks) => ranks.row_here(row),
+        }
+    }
+
+    /// Values held at this process's own entries (the others −0.0) made whole: as they are in
+    /// one process; summed over the ranks (each entry its owner's, to the bit).
+    #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
+    pub(super) fn share_owned_entries(&self, values: &mut [f64]) -> Result<(), LaError> {
+        match self {
+            KrylovSolver::Process { .. } => Ok(()),
+            #[cfg(feature = "mpi")]
+            KrylovSolver::Ranks(ranks) => ranks.share_owned_entries(values),
         }
     }
 

@@ -392,7 +392,7 @@ use std::time::Instant;
 
 use super::anderson::TailAnderson;
 use super::convexification::{convexify, ConvexSubproblem, InnerTolerance, LoopParams};
-use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem};
+use super::iterative::{krylov_solve, tangential, KrylovSolver, KrylovSystem, RowHere};
 use super::newton::{node_law_residual, slip_linearization};
 use super::{all_hold, Criterion, Prediction, SolveError, StepInfo};
 use crate::la::vector::{max_abs_diff as max_diff, norm2 as norm};
@@ -405,6 +405,14 @@ enum Linearized {
     Stick,
     /// ξ_i = a + B w_i (in the node's free tangent coordinates).
     Slip([f64; 2], [[f64; 2]; 2]),
+    /// A node whose rows another rank linearizes (a distributed run): slipping or not.
+    Elsewhere(bool),
+}
+
+impl Linearized {
+    fn slipping(&self) -> bool {
+        matches!(self, Linearized::Slip(..) | Linearized::Elsewhere(true))
+    }
 }
 
 /// The loosest tolerance a convex problem of the loop is solved to (relative to its largest
@@ -488,6 +496,9 @@ struct Linearization<'s> {
     /// Whether the last solve reached the Krylov tolerance rtol (not only the forcing term).
     tight: bool,
     nodes: Vec<Linearized>,
+    /// Where each contact node's rows are: every one this process's own, but on the ranks
+    /// ([`nodes_here`]).
+    here: Vec<RowHere>,
 }
 
 impl Linearization<'_> {
@@ -725,9 +736,12 @@ impl Linearization<'_> {
             .for_each(|row| rhs[row] = self.b[row]);
         a.values_from_mut(sys.first_contact).copy_from_slice(&sys.base);
         self.nodes.clear();
+        // A rank linearizes its own nodes and its block's overlap's, and classifies every node
+        // (the same on every rank, from the same w and ξ).
         for (i, node) in sys.nodes.iter().enumerate() {
             let range = i * td..(i + 1) * td;
-            if let Some(row) = node.theta {
+            let linearized_here = self.here[i] != RowHere::Elsewhere;
+            if let (Some(row), true) = (node.theta, linearized_here) {
                 rhs[row] += node.weight * self.laws.heat(i, norm(&w[range.clone()]));
             }
             let m = node.tangent.len();
@@ -739,6 +753,10 @@ impl Linearization<'_> {
             }
             let bound = frozen[i];
             let q_norm = norm(&q[..m]);
+            if !linearized_here {
+                self.nodes.push(Linearized::Elsewhere(q_norm > bound));
+                continue;
+            }
             // The law is on the relative slip z_i = w_i − v_F,i: stick is w_i = v_F,i, and
             // slip's ξ_i = a + B z_i is a − B v_F,i + B w_i in the unknowns.
             let mut v = [0.0; 2];
@@ -789,9 +807,13 @@ impl Linearization<'_> {
         // The previous solve left r = b̃ − Ã x for this x; only the Γ_C rows and the contact
         // nodes' temperature rows of Ã and b̃ changed since, so only they are recomputed (a
         // product with Ã saved per iteration).
+        // (On the ranks, in this rank's own rows: the solve reads no other.)
         if self.residual.len() == n {
-            let theta_rows = sys.nodes.iter().filter_map(|node| node.theta);
-            for row in (sys.first_contact..n).chain(theta_rows) {
+            let own = |row: &usize| self.solver.row_here(*row) == RowHere::Owned;
+            let theta_rows = (sys.nodes.iter().zip(&self.here))
+                .filter(|(_, &here)| here == RowHere::Owned)
+                .filter_map(|(node, _)| node.theta);
+            for row in (sys.first_contact..n).filter(own).chain(theta_rows) {
                 self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
             }
         }
@@ -804,18 +826,20 @@ impl Linearization<'_> {
         // (slip) or the rows (stick).
         let mut new_w = tangential(&sys.nodes, td, x, w.len());
         self.laws.make_relative(&mut new_w);
+        // Each node's ξ from its own rank (the ranks' parts then made whole: each entry its
+        // owner's, the others −0.0).
         let mut new_xi = vec![0.0; xi.len()];
         for (i, (node, lin)) in sys.nodes.iter().zip(&self.nodes).enumerate() {
             let start = i * td;
-            match lin {
-                Linearized::Stick => {
+            match (self.here[i], lin) {
+                (RowHere::Owned, Linearized::Stick) => {
                     // The node's rows of A (not Ã) leave ℓ_i ξ_i over.
                     for &(k, row) in &node.tangent {
                         let values = &sys.base[a.offset_from(sys.first_contact, row)];
                         new_xi[start + k] = (a.row_dot(row, values, x) - self.b[row]) / node.weight;
                     }
                 }
-                Linearized::Slip(a_i, b_i) => {
+                (RowHere::Owned, Linearized::Slip(a_i, b_i)) => {
                     for (j, &(k, _)) in node.tangent.iter().enumerate() {
                         new_xi[start + k] = a_i[j]
                             + (node.tangent.iter().enumerate())
@@ -823,10 +847,24 @@ impl Linearization<'_> {
                                 .sum::<f64>();
                     }
                 }
+                // Another rank's node: its ξ is its owner's, made whole below.
+                _ => new_xi[start..start + td].fill(-0.0),
             }
         }
+        self.solver.share_owned_entries(&mut new_xi)?;
         Ok((new_w, new_xi))
     }
+}
+
+/// Where each contact node's rows are ([`KrylovSolver::row_here`] of its first tangential row;
+/// a node without one, as its temperature row, is every process's own: its ξ is 0).
+fn nodes_here(sys: &KrylovSystem, solver: &KrylovSolver) -> Vec<RowHere> {
+    (sys.nodes.iter())
+        .map(|node| match node.tangent.first() {
+            Some(&(_, row)) => solver.row_here(row),
+            None => RowHere::Owned,
+        })
+        .collect()
 }
 
 /// The Newton–Krylov step solver on a [`KrylovSystem`].
@@ -960,6 +998,7 @@ impl<'a> NewtonKrylov<'a> {
             x,
             xi: previous.xi.clone(),
         };
+        let here = nodes_here(sys, solver);
         let mut newton = SemismoothNewton {
             solver: self,
             linearization: Linearization {
@@ -973,6 +1012,7 @@ impl<'a> NewtonKrylov<'a> {
                 residual: Vec::new(),
                 tight: false,
                 nodes: Vec::with_capacity(sys.nodes.len()),
+                here,
             },
             inner_converged: false,
             anderson: TailAnderson::new(self.anderson_depth),
@@ -1413,9 +1453,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
         if sweeps > 0 && self.prediction_stalled(&checks) {
             self.end_prediction_where_the_law_fails(iterate, &bounds);
         }
-        let split = (self.linearization.nodes.iter())
-            .map(|node| matches!(node, Linearized::Slip(..)))
-            .collect();
+        let split = self.linearization.nodes.iter().map(Linearized::slipping).collect();
         self.anderson.record(split, frozen, bounds, checks[2].1);
         info.anderson_combinations = self.anderson.combinations();
         Ok(checks)
@@ -1427,8 +1465,7 @@ impl ConvexSubproblem for SemismoothNewton<'_, '_> {
     }
 
     fn slipping(&self) -> Option<usize> {
-        let slipping = |node: &&Linearized| matches!(node, Linearized::Slip(..));
-        Some(self.linearization.nodes.iter().filter(slipping).count())
+        Some(self.linearization.nodes.iter().filter(|node| node.slipping()).count())
     }
 }
 

@@ -57,6 +57,7 @@
 //! [`crate::partition`] (the layout), [`crate::model`].
 
 use super::amg::RankVelocityBlock;
+use super::iterative::RowHere;
 use crate::la::mpi::{
     Communicator, CsrParts, DistributedKrylov, DistributedMatrix, DistributedPreconditioner, RowPattern,
 };
@@ -82,6 +83,10 @@ pub(crate) struct RankKrylov {
     changing: Box<ChangingRows>,
     /// What each solve hands to PETSc and brings back ([`RankKrylov::solve`]).
     exchange: Box<SolveExchange>,
+    /// Where each row of Ã from `first_changing` on is kept: this rank's own, its block's
+    /// overlap, or neither ([`RankKrylov::row_here`]).
+    changing_here: Vec<RowHere>,
+    comm: Communicator,
 }
 
 /// The vectors of [`RankKrylov::solve`], kept for the run (boxed, as `changing`: the solver
@@ -432,6 +437,16 @@ impl RankKrylov {
             // Block Jacobi is Schwarz without an overlap: the two-level method sweeps with it.
             matrix.set_overlap(&[])?;
         }
+        // Where the rows a linearization changes are: the rank's own (below), its overlap's,
+        // the others'.
+        let mut changing_here = vec![RowHere::Elsewhere; a.n() - first_changing];
+        if let Some(overlap) = &overlap {
+            for (here, row) in changing_here.iter_mut().zip(first_changing..) {
+                if overlap.rows.binary_search(&rows.global_of_row[row]).is_ok() {
+                    *here = RowHere::Overlap;
+                }
+            }
+        }
         if let Some(overlap) = overlap {
             let block_of = RankBlock::overlapped(&mut matrix, &rows, (&a, first_changing, first), overlap)?;
             block = Some(Box::new(block_of));
@@ -442,6 +457,9 @@ impl RankKrylov {
             cols.extend(a.row(row).0.iter().map(|&c| rows.global_of_row[c as usize]));
             ptr.push(cols.len());
         }
+        changing
+            .iter()
+            .for_each(|&row| changing_here[row - first_changing] = RowHere::Owned);
         let globals: Vec<usize> = changing.iter().map(|&row| rows.global_of_row[row]).collect();
         let changing = Box::new(ChangingRows {
             first,
@@ -471,6 +489,8 @@ impl RankKrylov {
             first_changing,
             changing,
             exchange,
+            changing_here,
+            comm,
         };
         Ok((solver, a))
     }
@@ -564,6 +584,17 @@ impl RankKrylov {
             iterations: info.iterations,
             residual: info.residual,
         })
+    }
+
+    /// Where row `row` of Ã (one a linearization changes: from `first_changing` on) is kept.
+    pub(crate) fn row_here(&self, row: usize) -> RowHere {
+        self.changing_here[row - self.first_changing]
+    }
+
+    /// Values that each rank holds at its own entries (the others −0.0), summed over the
+    /// ranks: every entry its owner's, to the bit (x + (−0.0) = x); collective.
+    pub(crate) fn share_owned_entries(&self, values: &mut [f64]) -> Result<(), LaError> {
+        self.comm.all_reduce_f64(values, crate::la::mpi::Reduction::Sum)
     }
 
     /// The last solution, whole, into x (the system's order) on every rank; collective.
