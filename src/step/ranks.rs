@@ -5,8 +5,7 @@
 //! and G only the columns its rows read ([`crate::model::ColumnShare`]), and the Newton
 //! iterates x, w, ξ (vectors of N and of Γ_C: 8 bytes per unknown each). Of the ordered
 //! step matrix Ã of [`super::iterative`] a rank assembles only its own rows and the Γ_C rows
-//! ([`RankRows::assembled`]), and keeps only the Γ_C rows after set-up: each linearization
-//! changes them in place on every rank, the same way from the same iterate. The Krylov solve,
+//! ([`RankRows::assembled`]), and keeps only the Γ_C rows after set-up. The Krylov solve,
 //! which is where a step spends its time, runs on PETSc: rank r owns the rows of Ã at the
 //! unknowns of its part of the mesh ([`MeshPartition`](crate::partition::MeshPartition):
 //! PT-Scotch on the dual graph, computed on rank 0 and broadcast once per run, shared with the
@@ -14,22 +13,31 @@
 //! hands them to PETSc's MPIAIJ matrix at set-up, split into its diagonal block and the rest,
 //! which PETSc keeps without a copy ([`DistributedMatrix::from_split`]) and, after each
 //! linearization, only the rows it changed ([`DistributedMatrix::set_rows`]), and PETSc's GCR
-//! (GMRES's iterates; it keeps its residual: [`DistributedKrylov`]'s header) runs with
+//! (GMRES's iterates; it keeps its residual: [`DistributedKrylov`]'s header; its directions
+//! allocated as the solves need them: `csrc/petsc_mpi.c`) runs with
 //! restricted additive Schwarz (one overlapping block per rank: the rank's rows and those of
 //! other ranks that they read), block Jacobi (one block per rank, `solver.overlap = 0`), or
 //! either's sweeps around GAMG on the velocity block (the serial path's two-level method,
 //! [`RankKrylov::set_velocity_amg`]), from the previous iterate and its residual as the serial
-//! solves do: the rows of the residual that a linearization changes (Ã's Γ_C rows, and the
-//! contact nodes' temperature rows, whose right-hand side carries the frictional heat) are
-//! recomputed on every rank from the rows it keeps, the others are the last solve's. Each
-//! rank's unknowns are numbered in the system's order, so its block has its Γ_C rows last
-//! (then, with Schwarz, its overlap's rows) and its ILU(0) is the serial path's: single
-//! precision, refactored only from the first row a linearization changes ([`RankBlock`]). Of
-//! the solution each rank takes its own rows and gathers those the next linearization reads,
-//! the columns of Ã's Γ_C rows (the same on every rank: [`RankKrylov::solve`]), so that the nodal law, the stop tests, the slip counts
-//! and the cutback decision are computed from the same numbers on every rank and agree without
-//! a reduction: the ranks take the same branches by construction. The whole solution is
-//! gathered once per step, for the state ([`RankKrylov::gather_whole`]).
+//! solves do. Each rank's unknowns are numbered in the system's order, so its block has its
+//! Γ_C rows last (then, with Schwarz, its overlap's rows) and its ILU(0) is the serial path's:
+//! single precision, refactored only from the first row a linearization changes
+//! ([`RankBlock`]).
+//!
+//! **Each Newton iteration on the rows a rank owns.** A rank linearizes the law at its own
+//! contact nodes and at those of its block's overlap ([`RankKrylov::row_here`]): it changes
+//! their rows of Ã in place, hands its own to PETSc and refactors its block; it recomputes the
+//! residual in its own rows that the linearization changed (Ã's Γ_C rows, and the contact
+//! nodes' temperature rows, whose right-hand side carries the frictional heat); and it forms ξ
+//! at its own nodes, made whole on every rank by one reduction
+//! ([`RankKrylov::share_owned_entries`]). Of the solution each rank takes its own rows and
+//! gathers those the next iteration reads, the columns of Ã's Γ_C rows (the same on every rank:
+//! [`RankKrylov::solve`]). So every rank holds the same w and ξ on Γ_C, and classifies every
+//! contact node (stick or slip), runs the bounds' prediction (a Gauss–Seidel sweep over Γ_C's
+//! rows, which follows Γ_C's order) and the stop tests from the same numbers: the ranks take
+//! the same branches by construction, and follow one process's path, bit for bit in the
+//! linearized rows. The whole solution is gathered once per step, for the state
+//! ([`RankKrylov::gather_whole`]).
 //!
 //! **Why the blocks overlap.** Block Jacobi drops every coupling between two ranks' unknowns,
 //! so its Krylov count grows with the ranks (344 iterations against one process's 303 at 972k
@@ -44,14 +52,16 @@
 //! ranks), but 0.49 s per step against 0.12 s: this crate's ILU(0) keeps the rows that no
 //! linearization changes.
 //!
-//! **Why replicate the iterates rather than distribute the Newton method too.** The nodal law
-//! and the stop tests read Γ_C's unknowns and their neighbours', O(|Γ_C|) per Newton iteration,
-//! against the Krylov solve's O(N) per Krylov iteration times 5–30 iterations: replicated, they
-//! cost little, and the ranks cannot disagree on a branch (a rank that stops its loop while
-//! another iterates would hang in the next collective call). What replication costs is memory
-//! (what every rank holds whole: ≈ 520 bytes per unknown, 0.36 of a rank's 1.3 GiB at 972k
-//! unknowns on 2 ranks) and a gather of N values per step; docs/distributed.md gives the figures
-//! and what ends them (the law on owned Γ_C nodes, ghost updates and reductions for the tests).
+//! **What stays replicated, and why.** The classification, the prediction and the stop tests
+//! read Γ_C's unknowns and their neighbours': O(|Γ_C|) = O(N^{2/3}) per Newton iteration,
+//! against the Krylov solve's O(N/P) per Krylov iteration; held alike on every rank, they
+//! cost a gather of the Γ_C neighbourhood, and no rank can leave a loop while another iterates
+//! (it would hang in the next collective call), where reductions of every test would leave
+//! that to rounding; and the prediction's sweep, which runs node after node in Γ_C's order,
+//! would take another path on each partition if each rank swept its own nodes. What
+//! replication still costs is memory (what every rank holds whole: ≈ 520 bytes per unknown)
+//! and a gather of N values per step (2–5 ms at 972k unknowns on 2 ranks); docs/distributed.md
+//! gives the figures and the plan for 10⁷–10⁸ unknowns.
 //!
 //! Depends on: [`crate::la::mpi`] (the distributed matrix, the communicator),
 //! [`crate::partition`] (the layout), [`crate::model`].
