@@ -468,8 +468,13 @@ fn stopped_run_hint(out: &std::path::Path) -> String {
 ///
 /// The signals are read on a thread of their own (`signal_hook::iterator`), not in a handler,
 /// so it may count them and print (`say`: rank 0 of a distributed run, whose ranks agree on the
-/// stop after each step, or the one process).
-fn stop_on_signals(say: bool) -> anyhow::Result<StopFlag> {
+/// stop, or the one process).
+///
+/// **Over ranks** (`over_ranks`) the first signal already cuts the step short: a rank hears one
+/// SIGTERM (Open MPI's `mpirun` sends it for a Ctrl-C and kills the ranks a second later; Slurm
+/// for its time limit, 30 s before), and the ranks leave the step at the same check, then write
+/// the folder ([`thermocontact::step::abort`]).
+fn stop_on_signals(say: bool, over_ranks: bool) -> anyhow::Result<StopFlag> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let flag = StopFlag::new();
     let stop = flag.clone();
@@ -480,6 +485,16 @@ fn stop_on_signals(say: bool) -> anyhow::Result<StopFlag> {
                 SIGTERM => Interruption::Terminate,
                 _ => Interruption::Interrupt,
             };
+            if over_ranks {
+                stop.request_now(cause);
+                if say && heard == 0 {
+                    eprintln!(
+                        "\nstopping: the ranks cut the current step short and write the folder, with a checkpoint \
+                         of the last completed step to continue from"
+                    );
+                }
+                continue;
+            }
             match heard {
                 0 if !say => stop.request(cause),
                 1 if !say => stop.request_now(cause),
@@ -718,7 +733,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
                 log: root,
                 overwrite,
                 replace_completed,
-                stop: Some(stop_on_signals(root)?),
+                stop: Some(stop_on_signals(root, size > 1)?),
                 restart,
                 ..RunOptions::default()
             };

@@ -620,6 +620,76 @@ mod distributed {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// SIGINT to `mpirun` (a Ctrl-C at the terminal): Open MPI's `mpirun` sends every rank
+    /// SIGTERM and kills the ranks a second later (`odls_base_sigkill_timeout`); the ranks cut
+    /// the step short at the same check and write the folder in that second: a non-zero status,
+    /// the message once, `interrupted`, a checkpoint, fewer steps than asked.
+    #[test]
+    fn sigint_to_mpirun_stops_every_rank_with_a_checkpoint() {
+        let dir = std::env::temp_dir().join(format!("thermocontact-distributed-sigint-{}", std::process::id()));
+        let folder = dir.join("stopped");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let args = scenario_with(
+            "paper3d.toml",
+            &[
+                "mesh.nx=40",
+                "mesh.ny=10",
+                "mesh.nz=10",
+                "time.steps=1024",
+                "time.final_time=1.0",
+                "output.times=[1.0]",
+                "output.vtk=false",
+                "output.checkpoint_every=8",
+                "solver.linear=\"iterative\"",
+            ],
+        );
+        let log = dir.join("said.txt");
+        let file = std::fs::File::create(&log).unwrap();
+        // Without a terminal: stdin closed (`mpirun` forwards its stdin to rank 0; one left
+        // open held its Ctrl-C back until the job ended).
+        let mut child = Command::new("mpirun")
+            .args(["--allow-run-as-root", "--oversubscribe", "-n", "2", CLI, "run"])
+            .args(&args)
+            .arg("--out")
+            .arg(&folder)
+            .arg("--quiet")
+            .env("RAYON_NUM_THREADS", "1")
+            .stdin(std::process::Stdio::null())
+            .stdout(file.try_clone().unwrap())
+            .stderr(file)
+            .spawn()
+            .expect("mpirun runs");
+        // Once the run is stepping (its first checkpoint, after 8 of the 1 024 steps).
+        let started = std::time::Instant::now();
+        while !folder.join("checkpoint.bin").exists() {
+            assert!(started.elapsed().as_secs() < 120, "the run completed its first steps");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        let signalled = (Command::new("kill").args(["-INT", &child.id().to_string()]).status()).unwrap();
+        assert!(signalled.success(), "mpirun was running");
+        while child.try_wait().unwrap().is_none() {
+            if started.elapsed().as_secs() > 300 {
+                let _ = child.kill();
+                panic!("mpirun still running 300 s after the start");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let said = std::fs::read_to_string(&log).unwrap();
+        assert!(!child.wait().unwrap().success(), "interrupted:\n{said}");
+        assert_eq!(
+            said.matches("the run was interrupted").count(),
+            1,
+            "the message once:\n{said}"
+        );
+        let summary = std::fs::read_to_string(folder.join("summary.json")).unwrap();
+        assert!(summary.contains("\"interrupted\""), "{summary}\n{said}");
+        assert!(folder.join("checkpoint.bin").is_file(), "a checkpoint:\n{said}");
+        let (_, steps) = read_csv(&folder.join("steps.csv"));
+        assert!(steps.len() < 1024, "{} steps:\n{said}", steps.len());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     /// SIGTERM to every rank (as a batch system's time limit sends it) stops the 2-rank run
     /// after the same step on every rank: a non-zero status, `interrupted`, a checkpoint. That
     /// run continued on 3 ranks, and on one process, equals the uninterrupted one-process run
@@ -637,6 +707,7 @@ mod distributed {
                 "time.final_time=0.25",
                 "output.times=[0.125,0.25]",
                 "output.vtk=false",
+                "output.checkpoint_every=1",
                 "solver.linear=\"iterative\"",
             ],
         );
@@ -656,12 +727,13 @@ mod distributed {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .expect("mpirun runs");
-        // Once rank 0 has opened the folder (set up, marching), the ranks are signalled: the
-        // processes whose command line names this folder after `run`.
+        // Once the run has completed a step (its first checkpoint), the ranks are signalled:
+        // the processes whose command line names this folder after `run` (a signal before the
+        // first step ends the run with nothing to continue from).
         let opened = std::time::Instant::now();
-        while !stopped.join("summary.json").exists() {
-            assert!(opened.elapsed().as_secs() < 120, "the run opened its folder");
-            std::thread::sleep(std::time::Duration::from_millis(10));
+        while !stopped.join("checkpoint.bin").exists() {
+            assert!(opened.elapsed().as_secs() < 120, "the run completed a step");
+            std::thread::sleep(std::time::Duration::from_millis(5));
         }
         let pattern = format!("^{CLI} run .*{}", stopped.display());
         let signalled = Command::new("pkill").args(["-TERM", "-f", &pattern]).status().unwrap();

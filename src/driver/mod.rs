@@ -268,10 +268,7 @@ fn march(
     o.recorder.marching();
     o.progress.marching();
     // A stop requested "now" cuts the step short inside its loops (`step::abort`).
-    let _abort = o
-        .stop
-        .cuts_steps_short()
-        .map(|flag| crate::step::abort::abort_on(flag.now()));
+    let _abort = o.stop.cutting_steps_short();
     // A step that runs long reports its outer iterations (`step::heartbeat`).
     let _heartbeat = o.progress.heartbeat();
     crate::step::heartbeat::step_started(first.n + 1, problem.time.time(first.n + 1));

@@ -79,8 +79,8 @@ impl StopFlag {
 /// it receives (Open MPI's `mpirun` passes a Ctrl-C on as SIGTERM to every rank, then SIGKILL
 /// after `odls_base_sigkill_timeout`, 1 s by default), maybe during different steps. So the
 /// ranks agree after each step (the largest request over the ranks, one reduction of one
-/// integer) and stop after the same one; a step is not cut short (ranks leaving a step at
-/// different iterations would wait for each other in the next collective call).
+/// integer) and stop after the same one; a step cut short is cut at the same check on every
+/// rank ([`crate::step::abort`]'s checks agree over the ranks too).
 pub(super) struct Stop<'a> {
     pub flag: Option<&'a StopFlag>,
     /// The run's steps are collective over the ranks of MPI's world.
@@ -88,9 +88,15 @@ pub(super) struct Stop<'a> {
 }
 
 impl Stop<'_> {
-    /// The flag that cuts a step short from outside ([`crate::step::abort`]): none over ranks.
-    pub fn cuts_steps_short(&self) -> Option<&StopFlag> {
-        self.flag.filter(|_| !self.over_ranks)
+    /// The scope in which the flag cuts a step short from outside ([`crate::step::abort`]):
+    /// over ranks, the ranks agree at each check.
+    pub fn cutting_steps_short(&self) -> Option<crate::step::abort::AbortScope> {
+        let now = self.flag?.now();
+        #[cfg(feature = "mpi")]
+        if self.over_ranks {
+            return Some(crate::step::abort::abort_on_ranks(now));
+        }
+        Some(crate::step::abort::abort_on(now))
     }
 
     /// Why the run was asked to stop, if it was: over ranks, the request of any rank.
@@ -113,13 +119,14 @@ impl Stop<'_> {
     }
 
     /// The error that ended the march at `last`, as the run reports it: a step cut short
-    /// ([`StepError::Aborted`]) is the interruption it was asked for, after `last`.
+    /// ([`StepError::Aborted`]) is the interruption it was asked for (over ranks: by any rank;
+    /// collective then, as every rank's step is cut short at the same check), after `last`.
     pub fn reported(&self, error: Error, last: &State) -> Error {
         match error {
             Error::Step(StepError::Aborted) => Error::Interrupted {
                 step: last.n,
                 time: last.t,
-                cause: self.flag.and_then(StopFlag::requested).unwrap_or(Interruption::Caller),
+                cause: self.requested().ok().flatten().unwrap_or(Interruption::Caller),
             },
             other => other,
         }

@@ -10,29 +10,49 @@
 //! failure of the step (no cutback retries it), and the driver reports it as the interruption
 //! it is, at the last completed step (which it keeps as a checkpoint).
 //!
-//! Checked at each convexification iteration and before each (sub)step of the time loop: each
-//! costs at most a few linear solves, so the wait after the request is that of one iteration.
+//! Checked before each (sub)step of the time loop, at each convexification iteration and, on
+//! the iterative path, before each Newton iteration's solve: the wait after the request is that
+//! of one linear solve there, of one iteration of the other loops.
 //! The fast solver's direct path has no loop that long (two solves per step), so there the
 //! request takes effect at the next step.
+//!
+//! **Over the ranks** of a distributed run ([`abort_on_ranks`]) the ranks reach those checks
+//! at the same points (they take the same branches from the same numbers: `crate::step`'s
+//! ranks), and each check is one reduction of one integer: every rank leaves the step at the
+//! same check when any rank was asked to, so none waits in a collective call for a rank that
+//! left. (`mpirun` sends a Ctrl-C on to the ranks as SIGTERM and kills them a second later:
+//! cutting the step short is what lets them write the folder in that second.)
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
+/// A thread's request flag, and whether its checks agree over the ranks.
+type Current = Option<(Arc<AtomicBool>, bool)>;
+
 thread_local! {
-    static FLAG: RefCell<Option<Arc<AtomicBool>>> = const { RefCell::new(None) };
+    static FLAG: RefCell<Current> = const { RefCell::new(None) };
 }
 
 /// While this lives, `flag` set means "cut the current step short" on this thread.
 #[must_use = "the flag is current only while the scope lives"]
 pub struct AbortScope {
-    previous: Option<Arc<AtomicBool>>,
+    previous: Current,
 }
 
 /// Makes `flag` the abort request of this thread's steps until the scope is dropped.
 pub fn abort_on(flag: Arc<AtomicBool>) -> AbortScope {
     AbortScope {
-        previous: FLAG.with(|current| current.replace(Some(flag))),
+        previous: FLAG.with(|current| current.replace(Some((flag, false)))),
+    }
+}
+
+/// [`abort_on`] for the steps of a distributed run: each check asks every rank (collective:
+/// every rank of MPI's world checks at the same points).
+#[cfg(feature = "mpi")]
+pub fn abort_on_ranks(flag: Arc<AtomicBool>) -> AbortScope {
+    AbortScope {
+        previous: FLAG.with(|current| current.replace(Some((flag, true)))),
     }
 }
 
@@ -43,18 +63,37 @@ impl Drop for AbortScope {
     }
 }
 
-/// Whether this thread's steps are asked to stop now.
+/// Whether this thread's steps are asked to stop now (by this process's flag).
 pub fn requested() -> bool {
-    FLAG.with(|current| current.borrow().as_ref().is_some_and(|f| f.load(Ordering::SeqCst)))
+    FLAG.with(|current| current.borrow().as_ref().is_some_and(|(f, _)| f.load(Ordering::SeqCst)))
 }
 
-/// [`super::StepError::Aborted`] where a stop now is requested.
+/// [`super::StepError::Aborted`] where a stop now is requested (over the ranks: by any rank).
 pub(crate) fn check() -> Result<(), super::StepError> {
-    if requested() {
+    let (here, over_ranks) = FLAG.with(|current| match current.borrow().as_ref() {
+        Some((f, over_ranks)) => (f.load(Ordering::SeqCst), *over_ranks),
+        None => (false, false),
+    });
+    let anywhere = if over_ranks { any_rank(here)? } else { here };
+    if anywhere {
         Err(super::StepError::Aborted)
     } else {
         Ok(())
     }
+}
+
+/// Whether `here` holds on any rank (one reduction; collective).
+#[cfg(feature = "mpi")]
+fn any_rank(here: bool) -> Result<bool, super::StepError> {
+    use crate::la::mpi::{Communicator, Reduction};
+    let mut flag = [usize::from(here)];
+    Communicator::world()?.all_reduce_usize(&mut flag, Reduction::Max)?;
+    Ok(flag[0] > 0)
+}
+
+#[cfg(not(feature = "mpi"))]
+fn any_rank(here: bool) -> Result<bool, super::StepError> {
+    Ok(here)
 }
 
 #[cfg(test)]

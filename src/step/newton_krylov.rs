@@ -723,6 +723,8 @@ impl Linearization<'_> {
         (fall, forcing): (Fall, f64),
         info: &mut StepInfo,
     ) -> Result<(Vec<f64>, Vec<f64>), SolveError> {
+        // A stop asked for now ends the step before the iteration's solve.
+        super::abort::check()?;
         let sys = self.system;
         let (td, n) = (self.td, sys.order.len());
         let a = &mut *self.a;
