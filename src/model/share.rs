@@ -365,18 +365,22 @@ mod tests {
         for &r in &rows {
             assert_eq!(bits(some.row(r)), bits(all.row(r)), "row {r}");
         }
+        // The share's right-hand side (from `from`) in its rows: the whole problem's to rounding.
+        let rows_agree = |b_share: &[f64], b_whole: &[f64], from: &str| {
+            let scale = b_whole.iter().fold(0.0f64, |s, b| s.max(b.abs()));
+            for &r in &rows {
+                assert!(
+                    (b_share[r] - b_whole[r]).abs() <= 1e-13 * scale,
+                    "right-hand side row {r} {from}: {} against {}",
+                    b_share[r],
+                    b_whole[r]
+                );
+            }
+        };
         let previous = rough_state(&whole, 1, 0.1875);
         let b_whole = whole_rhs.rhs(&whole, &previous, 0.25, None).unwrap();
         let b_share = share_rhs.rhs(share, &previous, 0.25, None).unwrap();
-        let scale = b_whole.iter().fold(0.0f64, |s, b| s.max(b.abs()));
-        for &r in &rows {
-            assert!(
-                (b_share[r] - b_whole[r]).abs() <= 1e-13 * scale,
-                "right-hand side row {r}: {} against {}",
-                b_share[r],
-                b_whole[r]
-            );
-        }
+        rows_agree(&b_share, &b_whole, "from the cells");
 
         // The energies: the shared terms are parts, the others whole on each share.
         let state = rough_state(&whole, 5, 0.25);
@@ -415,14 +419,6 @@ mod tests {
         let mut kept = state.clone();
         kept.elastic_force = force;
         let b_share = share_rhs.rhs(share, &kept, 0.3125, None).unwrap();
-        let scale = b_whole.iter().fold(0.0f64, |s, b| s.max(b.abs()));
-        for &r in &rows {
-            assert!(
-                (b_share[r] - b_whole[r]).abs() <= 1e-13 * scale,
-                "right-hand side row {r} from the kept force: {} against {}",
-                b_share[r],
-                b_whole[r]
-            );
-        }
+        rows_agree(&b_share, &b_whole, "from the kept force");
     }
 }
