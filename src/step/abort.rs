@@ -16,12 +16,13 @@
 //! The fast solver's direct path has no loop that long (two solves per step), so there the
 //! request takes effect at the next step.
 //!
-//! **Over the ranks** of a distributed run ([`abort_on_ranks`]) the ranks reach those checks
-//! at the same points (they take the same branches from the same numbers: `crate::step`'s
-//! ranks), and each check is one reduction of one integer: every rank leaves the step at the
-//! same check when any rank was asked to, so none waits in a collective call for a rank that
-//! left. (`mpirun` sends a Ctrl-C on to the ranks as SIGTERM and kills them a second later:
-//! cutting the step short is what lets them write the folder in that second.)
+//! **Over the ranks** of a distributed run (`abort_on_ranks`, in a build with the `mpi`
+//! feature) the ranks reach those checks at the same points (they take the same branches from
+//! the same numbers: `crate::step`'s ranks), and each check is one reduction of one integer:
+//! every rank leaves the step at the same check when any rank was asked to, so none waits in a
+//! collective call for a rank that left. (`mpirun` sends a Ctrl-C on to the ranks as SIGTERM
+//! and kills them a second later: cutting the step short is what lets them write the folder in
+//! that second.)
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
