@@ -806,17 +806,16 @@ impl Linearization<'_> {
         }
         let clock = Instant::now();
         self.solver.update(a, sys.first_contact)?;
-        // The previous solve left r = b̃ − Ã x for this x; only the Γ_C rows and the contact
-        // nodes' temperature rows of Ã and b̃ changed since, so only they are recomputed (a
-        // product with Ã saved per iteration).
-        // (On the ranks, in this rank's own rows: the solve reads no other.)
+        // The previous solve left r = b̃ − Ã x for this x; only the contact nodes' rows of Ã
+        // and b̃ (Γ_C's tangential rows, `first_contact..n`, and their temperature rows)
+        // changed since, so only they are recomputed (a product with Ã saved per iteration);
+        // on the ranks only those of a rank's own nodes, the solve reading no other.
         if self.residual.len() == n {
-            let own = |row: &usize| self.solver.row_here(*row) == RowHere::Owned;
-            let theta_rows = (sys.nodes.iter().zip(&self.here))
-                .filter(|(_, &here)| here == RowHere::Owned)
-                .filter_map(|(node, _)| node.theta);
-            for row in (sys.first_contact..n).filter(own).chain(theta_rows) {
-                self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
+            let own = (sys.nodes.iter().zip(&self.here)).filter(|(_, &here)| here == RowHere::Owned);
+            for (node, _) in own {
+                for row in node.tangent.iter().map(|&(_, row)| row).chain(node.theta) {
+                    self.residual[row] = rhs[row] - a.row_dot(row, a.row(row).1, x);
+                }
             }
         }
         info.newton_iterations += 1;
