@@ -125,11 +125,7 @@ impl ColumnShare {
         for &e in &self.row_cells {
             let (t, nodes) = cell_simplex(mesh, e as usize);
             let kx = kernels::isotropic_stiffness_product(&t, law(materials.of(e as usize)), &nodal(d, nodes, x));
-            for (a, &p) in nodes.iter().enumerate() {
-                for i in 0..d {
-                    y[p * d + i] += alpha * kx[a][i];
-                }
-            }
+            add_nodal(d, nodes, alpha, &kx, y);
         }
     }
 
@@ -138,7 +134,7 @@ impl ColumnShare {
     /// owns (the owner of a cell's lowest node sums it) of ∫_T 𝒯ε(x_a) : ε(x_b)
     /// (`fem::kernels::isotropic_energy_density`, each field's gradient taken once a cell), to be
     /// summed over the ranks ([`ColumnShare::sum`]); the same pass, from the same gradients,
-    /// also forms the products `along` asks for ([`RowProducts`]).
+    /// also forms the [`RowProducts`] asked for.
     pub fn stiffness_forms<const N: usize, const F: usize>(
         &self,
         (mesh, materials): (&Mesh, &CellMaterials),
@@ -167,11 +163,7 @@ impl ColumnShare {
             }
             if let Some((law, c, out)) = product.as_mut() {
                 let kx = kernels::isotropic_stiffness_product_of_gradient(&t, law(material), &grads[*c]);
-                for (a, &p) in nodes.iter().enumerate() {
-                    for i in 0..d {
-                        out[p * d + i] += kx[a][i];
-                    }
-                }
+                add_nodal(d, nodes, 1.0, &kx, out);
             }
             if owned {
                 for (sum, &(law, a, b)) in sums.iter_mut().zip(&forms) {
@@ -281,6 +273,16 @@ fn cell_simplex(mesh: &Mesh, e: usize) -> (Simplex, &[usize]) {
     let mut vertices = [[0.0; 3]; 4];
     nodes.iter().zip(&mut vertices).for_each(|(&p, v)| *v = mesh.coords[p]);
     (Simplex::new(mesh.dim, &vertices[..nodes.len()]), nodes)
+}
+
+/// y += α v at `nodes` of a full nodal vector field with d components a node (a cell's nodal
+/// values `v[a]`, as [`nodal`] gathers them).
+fn add_nodal(d: usize, nodes: &[usize], alpha: f64, v: &[[f64; 3]; 4], y: &mut [f64]) {
+    for (a, &p) in nodes.iter().enumerate() {
+        for i in 0..d {
+            y[p * d + i] += alpha * v[a][i];
+        }
+    }
 }
 
 /// The nodal values at `nodes` of a full nodal vector field with d components a node.
